@@ -1,0 +1,83 @@
+#pragma once
+/// \file
+/// The kDet queries: every intersecting triangle pair between two meshes, or inside one mesh.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "kdet_fcl/backend.h"
+#include "kdet_fcl/hashed_mesh.h"
+
+namespace kdet_fcl {
+
+/// What a query asks for. Pay only for what is asked: `max_pairs = 1` is a yes/no query that
+/// stops at the first intersecting pair.
+struct QueryOptions {
+  /// Stop once this many pairs are found (0: find every pair). The reported pairs are the first
+  /// ones in the deterministic output order (see QueryResult::pairs).
+  std::size_t max_pairs = 0;
+  /// Worker threads (0: std::thread::hardware_concurrency()). Results do not depend on it.
+  int threads = 0;
+  /// Which backend runs the query.
+  Backend backend = Backend::Cpu;
+};
+
+/// One intersecting pair: triangle `a` of the first mesh and triangle `b` of the second (for a
+/// self query: a < b, both in the same mesh). Indices are positions in TriangleMesh::triangles.
+struct TrianglePair {
+  std::uint32_t a, b;
+  bool operator==(const TrianglePair& o) const { return a == o.a && b == o.b; }
+  bool operator!=(const TrianglePair& o) const { return !(*this == o); }
+  bool operator<(const TrianglePair& o) const { return a != o.a ? a < o.a : b < o.b; }
+};
+
+/// Counters of one query (for profiling and the benchmarks).
+struct QueryStats {
+  std::uint64_t cells_visited = 0;    ///< hash lookups that found an occupied cell
+  std::uint64_t box_tests = 0;        ///< candidate pairs whose boxes were compared
+  std::uint64_t triangle_tests = 0;   ///< exact triangle-triangle tests run
+};
+
+/// Result of a query.
+struct QueryResult {
+  /// The intersecting pairs, each exactly once. The order is deterministic (the same input gives
+  /// the same order for any thread count) but not sorted; sort it if you need (a, b) order.
+  std::vector<TrianglePair> pairs;
+  /// False when max_pairs pairs were found: the query stopped there and more pairs may exist.
+  bool complete = true;
+  QueryStats stats;
+};
+
+/// All pairs (i, j), i a triangle of `a` and j of `b`, whose closed triangles intersect (touching
+/// at a point or an edge and coplanar overlap count), decided exactly on the coordinates of `a`
+/// mapped into `b`'s frame (rounded in precision S) and `b`'s own coordinates.
+template <class S>
+QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options = {});
+
+/// All pairs (i < j) of intersecting triangles of one mesh, except pairs that share a vertex
+/// (the same vertex index, or vertices with equal coordinates, so soups work too).
+template <class S>
+QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options = {});
+
+/// Yes/no: do the two meshes have at least one intersecting triangle pair?
+template <class S>
+bool meshesIntersect(const HashedMesh<S>& a, const HashedMesh<S>& b, QueryOptions options = {}) {
+  options.max_pairs = 1;
+  return !intersectMeshes(a, b, options).pairs.empty();
+}
+
+/// O(n*m) reference: the same exact predicate on every pair (tests and regressions use it).
+/// Sorted by (a, b).
+template <class S>
+std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
+                                                    const Transform<S>& pose_a,
+                                                    const TriangleMesh<S>& b,
+                                                    const Transform<S>& pose_b);
+
+/// O(n^2) reference for intersectSelf. Sorted by (a, b).
+template <class S>
+std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& mesh);
+
+}  // namespace kdet_fcl

@@ -1,0 +1,69 @@
+// O(n*m) references with the same exact predicate and the same mapping of A into B's frame as
+// the backends: a pair set from any backend must equal these exactly.
+
+#include <algorithm>
+
+#include "kdet_fcl/detail/aabb.h"
+#include "kdet_fcl/detail/pose.h"
+#include "kdet_fcl/detail/triangle_intersection.h"
+#include "kdet_fcl/query.h"
+
+namespace kdet_fcl {
+
+template <class S>
+std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
+                                                    const Transform<S>& pose_a,
+                                                    const TriangleMesh<S>& b,
+                                                    const Transform<S>& pose_b) {
+  a.validate(false, "bruteForceIntersectMeshes: first mesh");
+  b.validate(false, "bruteForceIntersectMeshes: second mesh");
+  const detail::RelativePose rp = detail::relativePose(pose_a, pose_b);
+  std::vector<Vec3<S>> va(a.vertices);
+  if (!rp.identity)
+    for (Vec3<S>& p : va) p = detail::mapPoint(rp.a_to_b, p);
+  std::vector<TrianglePair> out;
+  for (std::size_t i = 0; i < a.triangles.size(); ++i) {
+    const Triangle& ti = a.triangles[i];
+    for (std::size_t j = 0; j < b.triangles.size(); ++j) {
+      const Triangle& tj = b.triangles[j];
+      if (detail::trianglesIntersect(va[ti[0]], va[ti[1]], va[ti[2]], b.vertices[tj[0]],
+                                     b.vertices[tj[1]], b.vertices[tj[2]]))
+        out.push_back({std::uint32_t(i), std::uint32_t(j)});
+    }
+  }
+  return out;
+}
+
+template <class S>
+std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& m) {
+  m.validate(false, "bruteForceIntersectSelf");
+  const auto& v = m.vertices;
+  std::vector<TrianglePair> out;
+  for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+    const Triangle& ti = m.triangles[i];
+    for (std::size_t j = i + 1; j < m.triangles.size(); ++j) {
+      const Triangle& tj = m.triangles[j];
+      bool adjacent = false;
+      for (int p = 0; p < 3; ++p)
+        for (int q = 0; q < 3; ++q)
+          adjacent = adjacent || ti[p] == tj[q] || v[ti[p]] == v[tj[q]];
+      if (!adjacent && detail::trianglesIntersect(v[ti[0]], v[ti[1]], v[ti[2]], v[tj[0]],
+                                                  v[tj[1]], v[tj[2]]))
+        out.push_back({std::uint32_t(i), std::uint32_t(j)});
+    }
+  }
+  return out;
+}
+
+template std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<float>&,
+                                                             const Transform<float>&,
+                                                             const TriangleMesh<float>&,
+                                                             const Transform<float>&);
+template std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<double>&,
+                                                             const Transform<double>&,
+                                                             const TriangleMesh<double>&,
+                                                             const Transform<double>&);
+template std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<float>&);
+template std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<double>&);
+
+}  // namespace kdet_fcl

@@ -1,0 +1,66 @@
+#pragma once
+// The CPU hierarchical spatial hash of one mesh, built in the mesh's own frame.
+
+#include <cstdint>
+#include <vector>
+
+#include "kdet_fcl/detail/aabb.h"
+#include "kdet_fcl/detail/hierarchy.h"
+#include "kdet_fcl/hashed_mesh.h"
+#include "kdet_fcl/triangle_mesh.h"
+
+namespace kdet_fcl {
+namespace detail {
+
+/// Owning CPU structure. Per triangle: box, enclosing diameter, level. Cells: an open-addressing
+/// table of full 128-bit keys, each slot pointing at a contiguous run of triangle ids in
+/// `entries` (ids in increasing order inside a cell). Memory is linear in the triangle count.
+template <class S>
+class HierarchicalHash {
+ public:
+  struct Slot {
+    CellKey key;
+    std::uint32_t begin;
+    std::uint32_t count;  // 0: empty slot (an occupied cell always holds a triangle)
+  };
+
+  /// Builds from the mesh's local coordinates. `mesh` must be valid.
+  void build(const TriangleMesh<S>& mesh, int threads);
+
+  /// The slot of a cell, or nullptr when the cell is empty.
+  const Slot* find(const CellKey& key) const {
+    if (slots_.empty()) return nullptr;
+    std::uint64_t i = hashCellKey(key) & mask_;
+    while (true) {
+      const Slot& s = slots_[i];
+      if (s.count == 0) return nullptr;
+      if (s.key == key) return &s;
+      i = (i + 1) & mask_;
+    }
+  }
+
+  std::size_t numTriangles() const { return diameter.size(); }
+  bool empty() const { return diameter.empty(); }
+  bool levelOccupied(int l) const { return (level_mask >> l) & 1u; }
+  HierarchyStats stats() const;
+
+  // Per triangle (local frame).
+  std::vector<Aabb<double>> boxes;
+  std::vector<double> diameter;
+  std::vector<std::uint8_t> level;
+  // The hierarchy.
+  GridParams grid;
+  Aabb<double> bounds{};   // box of all triangles
+  std::uint64_t level_mask = 0;
+  int top_level = 0;
+  double d_min = 0, d_max = 0;
+  std::vector<std::uint32_t> entries;
+
+ private:
+  std::vector<Slot> slots_;
+  std::uint64_t mask_ = 0;
+  std::size_t cells_ = 0;
+};
+
+}  // namespace detail
+}  // namespace kdet_fcl

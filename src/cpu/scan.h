@@ -1,0 +1,46 @@
+#pragma once
+// The inner loop of every kDet lookup on the CPU, shared by the queries and the k-free analysis.
+
+#include <cstdint>
+
+#include "cpu/hierarchical_hash.h"
+#include "kdet_fcl/query.h"
+
+namespace kdet_fcl {
+namespace cpu {
+
+/// Visits every candidate of one query triangle in hierarchy `h`: triangles stored on the query's
+/// level or a coarser one, in cells its box covers, accepted by `accept` (the size rule), whose
+/// boxes overlap the query box, seen from the canonical cell of that overlap only. Calls
+/// test_and_emit(j) for each; stops (returns false) when it returns false.
+template <class S, class Accept, class TestEmit>
+bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<double>& qbox, double dq,
+                    Accept&& accept, TestEmit&& test_and_emit, QueryStats& st) {
+  const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, h.bounds);
+  if (detail::isEmpty(clipped)) return true;
+  for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
+    if (!h.levelOccupied(L)) continue;
+    const detail::CellRange r = detail::cellRange(clipped, L, h.grid);
+    for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
+      for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
+        for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
+          const auto* slot = h.find(detail::makeCellKey(L, x, y, z));
+          if (!slot) continue;
+          ++st.cells_visited;
+          const std::uint32_t* ids = h.entries.data() + slot->begin;
+          for (std::uint32_t k = 0; k < slot->count; ++k) {
+            const std::uint32_t j = ids[k];
+            if (!accept(j)) continue;
+            ++st.box_tests;
+            const detail::Aabb<double>& bj = h.boxes[j];
+            if (!detail::boxesOverlap(qbox, bj)) continue;
+            if (!detail::isCanonicalCell(qbox, bj, L, h.grid, x, y, z)) continue;
+            if (!test_and_emit(j)) return false;
+          }
+        }
+  }
+  return true;
+}
+
+}  // namespace cpu
+}  // namespace kdet_fcl

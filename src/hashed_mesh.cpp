@@ -1,0 +1,94 @@
+#include "kdet_fcl/hashed_mesh.h"
+
+#include <cmath>
+#include <type_traits>
+#include <utility>
+
+#include "cpu/hierarchical_hash.h"
+#include "kdet_fcl/errors.h"
+
+namespace kdet_fcl {
+
+template <class S>
+HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int threads)
+    : mesh_(std::move(mesh)), threads_(threads) {
+  mesh_.validate(false, "HashedMesh");
+  setPose(pose);
+  hash_ = std::make_unique<detail::HierarchicalHash<S>>();
+  rebuild();
+}
+
+template <class S>
+HashedMesh<S>::~HashedMesh() = default;
+template <class S>
+HashedMesh<S>::HashedMesh(HashedMesh&&) noexcept = default;
+template <class S>
+HashedMesh<S>& HashedMesh<S>::operator=(HashedMesh&&) noexcept = default;
+
+template <class S>
+double HashedMesh<S>::orthonormalTolerance() {
+  return std::is_same<S, float>::value ? 1e-5 : 1e-6;
+}
+
+template <class S>
+void HashedMesh<S>::setPose(const Transform<S>& pose) {
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(pose.t[i])) throw InvalidInputError("setPose: non-finite translation");
+    for (int j = 0; j < 3; ++j)
+      if (!std::isfinite(pose.R[i][j])) throw InvalidInputError("setPose: non-finite rotation");
+  }
+  const double tol = orthonormalTolerance();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      double s = 0;
+      for (int k = 0; k < 3; ++k) s += double(pose.R[k][i]) * double(pose.R[k][j]);
+      if (std::fabs(s - (i == j ? 1.0 : 0.0)) > tol)
+        throw InvalidInputError(
+            "setPose: the rotation is not orthonormal (|R^T R - I| exceeds " +
+            std::to_string(tol) + "); scaling and shearing are not supported");
+    }
+  const auto& R = pose.R;
+  const double det = double(R[0][0]) * (double(R[1][1]) * R[2][2] - double(R[1][2]) * R[2][1]) -
+                     double(R[0][1]) * (double(R[1][0]) * R[2][2] - double(R[1][2]) * R[2][0]) +
+                     double(R[0][2]) * (double(R[1][0]) * R[2][1] - double(R[1][1]) * R[2][0]);
+  if (std::fabs(det - 1.0) > 4 * tol)
+    throw InvalidInputError("setPose: the rotation has determinant " + std::to_string(det) +
+                            " (a reflection, not a rotation)");
+  pose_ = pose;
+}
+
+template <class S>
+void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
+  if (vertices.size() != mesh_.vertices.size())
+    throw InvalidInputError("updateVertices: got " + std::to_string(vertices.size()) +
+                            " vertices, the mesh has " + std::to_string(mesh_.vertices.size()) +
+                            " (use setMesh() to change the topology)");
+  TriangleMesh<S> probe;  // validate the new coordinates before touching the mesh
+  probe.vertices = vertices;
+  probe.validate(false, "updateVertices");
+  mesh_.vertices = std::move(probe.vertices);
+  rebuild();
+}
+
+template <class S>
+void HashedMesh<S>::setMesh(TriangleMesh<S> mesh) {
+  mesh.validate(false, "setMesh");
+  mesh_ = std::move(mesh);
+  rebuild();
+}
+
+template <class S>
+void HashedMesh<S>::rebuild() {
+  hash_->build(mesh_, threads_);
+  ++version_;
+}
+
+template <class S>
+HierarchyStats HashedMesh<S>::stats() const {
+  return hash_->stats();
+}
+
+template class HashedMesh<float>;
+template class HashedMesh<double>;
+
+}  // namespace kdet_fcl

@@ -1,0 +1,219 @@
+// Every pair set equals the O(n^2) brute force with the same exact predicate.
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "test_util.h"
+
+using namespace kdet_fcl;
+using kdet_test::sorted;
+
+namespace {
+
+template <class S>
+void expectPairQueryMatchesBruteForce(const TriangleMesh<S>& a, const Transform<S>& pa,
+                                      const TriangleMesh<S>& b, const Transform<S>& pb,
+                                      const char* what) {
+  const HashedMesh<S> ha(a, pa), hb(b, pb);
+  const QueryResult r = intersectMeshes(ha, hb);
+  const auto got = sorted(r.pairs);
+  const auto want = bruteForceIntersectMeshes(a, pa, b, pb);
+  EXPECT_EQ(got.size(), r.pairs.size());
+  ASSERT_EQ(got, want) << what;
+  EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "pair reported twice";
+  EXPECT_TRUE(r.complete);
+  EXPECT_EQ(meshesIntersect(ha, hb), !want.empty()) << what;
+}
+
+template <class S>
+void expectSelfQueryMatchesBruteForce(const TriangleMesh<S>& m, const char* what) {
+  const HashedMesh<S> hm(m);
+  const auto got = sorted(intersectSelf(hm).pairs);
+  ASSERT_EQ(got, bruteForceIntersectSelf(m)) << what;
+  for (const auto& p : got) EXPECT_LT(p.a, p.b);
+}
+
+template <class S>
+class QueryTyped : public ::testing::Test {};
+using Precisions = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(QueryTyped, Precisions);
+
+}  // namespace
+
+TYPED_TEST(QueryTyped, RandomSoupsOfSeveralSizeDistributions) {
+  using S = TypeParam;
+  struct Dist {
+    S min_size, max_size;
+    const char* name;
+  };
+  const Dist dists[] = {{S(0.5), S(0.5), "equal sizes"},
+                        {S(0.05), S(2), "log-uniform 40x"},
+                        {S(0.001), S(8), "log-uniform 8000x"}};
+  std::mt19937_64 rng(42);
+  int nonempty = 0;
+  for (const Dist& d : dists)
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      const auto a = makeRandomSoup<S>(400, S(6), d.min_size, d.max_size, seed);
+      const auto b = makeRandomSoup<S>(300, S(6), d.min_size, d.max_size, seed + 100);
+      const Transform<S> pa = kdet_test::randomPose<S>(rng, -1, 1);
+      const Transform<S> pb = kdet_test::randomPose<S>(rng, -1, 1);
+      expectPairQueryMatchesBruteForce(a, pa, b, pb, d.name);
+      expectPairQueryMatchesBruteForce(a, Transform<S>(), b, Transform<S>(), d.name);
+      expectSelfQueryMatchesBruteForce(a, d.name);
+      nonempty += bruteForceIntersectSelf(a).empty() ? 0 : 1;
+    }
+  EXPECT_GT(nonempty, 5);  // the scenes do collide
+}
+
+TYPED_TEST(QueryTyped, ClothOverSphereAndClothSelf) {
+  using S = TypeParam;
+  const auto cloth = makeDrapedCloth<S>(24, S(4), S(1), S(0.03), S(1));
+  const auto sphere = makeSphere<S>({0, 0, 0}, S(1), 24, 12);
+  expectPairQueryMatchesBruteForce(cloth, Transform<S>(), sphere, Transform<S>(), "cloth/sphere");
+  expectSelfQueryMatchesBruteForce(cloth, "cloth self");
+  expectSelfQueryMatchesBruteForce(sphere, "sphere self");
+  EXPECT_FALSE(bruteForceIntersectMeshes(cloth, Transform<S>(), sphere, Transform<S>()).empty());
+  EXPECT_FALSE(bruteForceIntersectSelf(cloth).empty());
+  EXPECT_TRUE(bruteForceIntersectSelf(sphere).empty());
+}
+
+TEST(Query, FclEnvAgainstRobUnderRandomPoses) {
+  const std::string env = kdet_test::sharedData("fcl/env.obj");
+  const std::string rob = kdet_test::sharedData("fcl/rob.obj");
+  if (env.empty() || rob.empty()) GTEST_SKIP() << "../shared/data is absent";
+  const auto menv = readMesh<double>(env);
+  const auto mrob = readMesh<double>(rob);
+  HashedMesh<double> henv(menv), hrob(mrob);
+  std::mt19937_64 rng(2024);
+  int colliding = 0;
+  std::size_t pairs = 0;
+  for (int k = 0; k < 100; ++k) {
+    // FCL's test_mesh_mesh: env gets a random pose in [-3000,3000]^2 x [0,3000], rob identity.
+    Transform<double> pose = kdet_test::randomPose<double>(rng, -3000, 3000);
+    pose.t.z = std::abs(pose.t.z) / 2;
+    henv.setPose(pose);
+    const auto got = sorted(intersectMeshes(henv, hrob).pairs);
+    const auto want = bruteForceIntersectMeshes(menv, pose, mrob, Transform<double>());
+    ASSERT_EQ(got, want) << "pose " << k;
+    colliding += got.empty() ? 0 : 1;
+    pairs += got.size();
+  }
+  EXPECT_GT(colliding, 10);
+  EXPECT_GT(pairs, 100u);
+}
+
+TEST(Query, ResultsAndOrderAreIdenticalForOneAndTwoThreads) {
+  const auto cloth = makeDrapedCloth<double>(110, 4.0, 1.0, 0.03, 1.0);  // 24k triangles
+  const auto sphere = makeSphere<double>({0, 0, 0}, 1.0, 64, 32);
+  HashedMesh<double> hc(cloth, Transform<double>(), 1), hs(sphere, Transform<double>(), 2);
+  HashedMesh<double> hc2(cloth, Transform<double>(), 2);
+  QueryOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const QueryResult r1 = intersectMeshes(hc, hs, one), r2 = intersectMeshes(hc2, hs, two);
+  EXPECT_EQ(r1.pairs, r2.pairs);  // same pairs in the same order
+  EXPECT_FALSE(r1.pairs.empty());
+  EXPECT_EQ(intersectSelf(hc, one).pairs, intersectSelf(hc2, two).pairs);
+  EXPECT_FALSE(intersectSelf(hc, one).pairs.empty());
+  for (std::size_t k : {std::size_t(1), std::size_t(7), std::size_t(100)}) {
+    one.max_pairs = two.max_pairs = k;
+    EXPECT_EQ(intersectMeshes(hc, hs, one).pairs, intersectMeshes(hc2, hs, two).pairs) << k;
+    EXPECT_EQ(intersectSelf(hc, one).pairs, intersectSelf(hc2, two).pairs) << k;
+  }
+}
+
+TEST(Query, MaxPairsStopsEarlyWithAPrefixOfTheFullOrder) {
+  const auto cloth = makeDrapedCloth<double>(40, 4.0, 1.0, 0.03, 1.0);
+  const auto sphere = makeSphere<double>({0, 0, 0}, 1.0, 32, 16);
+  HashedMesh<double> hc(cloth), hs(sphere);
+  const QueryResult all = intersectMeshes(hc, hs);
+  ASSERT_GT(all.pairs.size(), 20u);
+  for (std::size_t k : {std::size_t(1), std::size_t(5), std::size_t(20)}) {
+    QueryOptions o;
+    o.max_pairs = k;
+    const QueryResult part = intersectMeshes(hc, hs, o);
+    ASSERT_EQ(part.pairs.size(), k);
+    EXPECT_FALSE(part.complete);
+    EXPECT_TRUE(std::equal(part.pairs.begin(), part.pairs.end(), all.pairs.begin()));
+    // Paying only for what is asked: fewer exact tests than the full query.
+    EXPECT_LT(part.stats.triangle_tests, all.stats.triangle_tests);
+  }
+  QueryOptions o;
+  o.max_pairs = all.pairs.size() + 1;
+  const QueryResult more = intersectMeshes(hc, hs, o);
+  EXPECT_EQ(more.pairs, all.pairs);
+  EXPECT_TRUE(more.complete);
+  EXPECT_TRUE(meshesIntersect(hc, hs));
+  hc.setPose(makeTransform<double>({1, 0, 0}, 0.3, {10, 0, 0}));
+  EXPECT_FALSE(meshesIntersect(hc, hs));
+}
+
+TEST(Query, TouchingAndCoincidentGeometryCounts) {
+  // Two unit squares (two triangles each) sharing the plane z = 0 and touching along x = 1.
+  TriangleMesh<double> a, b;
+  a.addTriangle({0, 0, 0}, {1, 0, 0}, {1, 1, 0});
+  a.addTriangle({0, 0, 0}, {1, 1, 0}, {0, 1, 0});
+  b.addTriangle({1, 0, 0}, {2, 0, 0}, {2, 1, 0});
+  b.addTriangle({1, 0, 0}, {2, 1, 0}, {1, 1, 0});
+  expectPairQueryMatchesBruteForce(a, Transform<double>(), b, Transform<double>(), "touching");
+  EXPECT_FALSE(bruteForceIntersectMeshes(a, Transform<double>(), b, Transform<double>()).empty());
+  // A mesh against an identical copy: every pair that shares a point.
+  const auto s = makeSphere<double>({0, 0, 0}, 1.0, 12, 6);
+  expectPairQueryMatchesBruteForce(s, Transform<double>(), s, Transform<double>(), "coincident");
+  // The same, far from the origin and rotated by 180 degrees about z.
+  const Transform<double> far = makeTransform<double>({0, 0, 1}, 3.14159265358979323846, {1e5, -1e5, 1e5});
+  expectPairQueryMatchesBruteForce(s, far, s, far, "coincident far away");
+}
+
+TEST(Query, DeformationAndTopologyChangesAreSeen) {
+  auto cloth = makeDrapedCloth<double>(30, 4.0, 1.0, 0.03, 0.0);  // flat, above the sphere
+  const auto sphere = makeSphere<double>({0, 0, 0}, 1.0, 24, 12);
+  HashedMesh<double> hc(cloth), hs(sphere);
+  EXPECT_TRUE(intersectMeshes(hc, hs).pairs.empty());
+  for (double t : {0.3, 0.7, 1.0}) {
+    const auto frame = makeDrapedCloth<double>(30, 4.0, 1.0, 0.03, t);
+    hc.updateVertices(frame.vertices);
+    ASSERT_EQ(sorted(intersectMeshes(hc, hs).pairs),
+              bruteForceIntersectMeshes(frame, Transform<double>(), sphere, Transform<double>()));
+    ASSERT_EQ(sorted(intersectSelf(hc).pairs), bruteForceIntersectSelf(frame));
+  }
+  EXPECT_FALSE(intersectMeshes(hc, hs).pairs.empty());
+  // Fracture: drop every other triangle and add a loose piece through the sphere.
+  TriangleMesh<double> broken;
+  broken.vertices = hc.mesh().vertices;
+  for (std::size_t i = 0; i < hc.mesh().triangles.size(); i += 2)
+    broken.triangles.push_back(hc.mesh().triangles[i]);
+  broken.addTriangle({-2, -2, 0}, {2, -2, 0}, {0, 2, 0});
+  hc.setMesh(broken);
+  ASSERT_EQ(sorted(intersectMeshes(hc, hs).pairs),
+            bruteForceIntersectMeshes(broken, Transform<double>(), sphere, Transform<double>()));
+  ASSERT_EQ(sorted(intersectSelf(hc).pairs), bruteForceIntersectSelf(broken));
+}
+
+TEST(Query, SelfCollisionSkipsVertexSharingPairsInSoups) {
+  // The same strip as an indexed mesh and as a soup: adjacency by index and by coordinates.
+  TriangleMesh<double> indexed;
+  indexed.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  indexed.triangles = {{0, 1, 2}, {1, 3, 2}};
+  TriangleMesh<double> soup;
+  soup.addTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  soup.addTriangle({1, 0, 0}, {1, 1, 0}, {0, 1, 0});
+  EXPECT_TRUE(intersectSelf(HashedMesh<double>(indexed)).pairs.empty());
+  EXPECT_TRUE(intersectSelf(HashedMesh<double>(soup)).pairs.empty());
+  // A third triangle piercing both (sharing no vertex) collides with both.
+  soup.addTriangle({0.5, 0.2, -1}, {0.6, 0.8, 1}, {0.4, 0.5, 1});
+  const auto got = sorted(intersectSelf(HashedMesh<double>(soup)).pairs);
+  EXPECT_EQ(got, (std::vector<TrianglePair>{{0, 2}, {1, 2}}));
+  EXPECT_EQ(got, bruteForceIntersectSelf(soup));
+}
+
+TEST(Query, CudaBackendRequestIsATypedError) {
+  HashedMesh<double> a(makeSphere<double>({0, 0, 0}, 1.0, 8, 4));
+  QueryOptions o;
+  o.backend = Backend::Cuda;
+  EXPECT_THROW(intersectMeshes(a, a, o), BackendUnavailableError);
+  EXPECT_THROW(intersectSelf(a, o), BackendUnavailableError);
+  o.backend = Backend::Auto;
+  EXPECT_NO_THROW(intersectSelf(a, o));
+}

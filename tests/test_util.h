@@ -1,0 +1,54 @@
+#pragma once
+// Helpers shared by the tests (tested themselves in test_geometry.cpp).
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "kdet_fcl/kdet_fcl.h"
+
+namespace kdet_test {
+
+/// Absolute path of a file in ../shared/data, or "" when the folder is absent (tests skip).
+inline std::string sharedData(const std::string& rel) {
+  const std::filesystem::path p = std::filesystem::path(KDET_FCL_SHARED_DATA) / rel;
+  return std::filesystem::exists(p) ? p.string() : std::string();
+}
+
+inline std::vector<kdet_fcl::TrianglePair> sorted(std::vector<kdet_fcl::TrianglePair> v) {
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+/// A random rigid pose: rotation from a random unit quaternion, translation uniform in the box.
+template <class S>
+kdet_fcl::Transform<S> randomPose(std::mt19937_64& rng, double lo, double hi) {
+  std::normal_distribution<double> g(0, 1);
+  double q[4] = {g(rng), g(rng), g(rng), g(rng)};
+  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  for (double& c : q) c /= n;
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  const double R[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+                          {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+                          {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
+  kdet_fcl::Transform<S> T;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) T.R[i][j] = S(R[i][j]);
+  std::uniform_real_distribution<double> u(lo, hi);
+  T.t = {S(u(rng)), S(u(rng)), S(u(rng))};
+  return T;
+}
+
+/// Converts a mesh between precisions.
+template <class To, class From>
+kdet_fcl::TriangleMesh<To> convert(const kdet_fcl::TriangleMesh<From>& m) {
+  kdet_fcl::TriangleMesh<To> r;
+  r.triangles = m.triangles;
+  for (const auto& v : m.vertices) r.vertices.push_back({To(v.x), To(v.y), To(v.z)});
+  return r;
+}
+
+}  // namespace kdet_test
