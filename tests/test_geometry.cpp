@@ -149,7 +149,7 @@ TEST(CellCoverage, CanonicalCellIsUniqueInTheCommonRange) {
     for (std::int64_t x = std::max(a.lo[0], b.lo[0]); x <= std::min(a.hi[0], b.hi[0]); ++x)
       for (std::int64_t y = std::max(a.lo[1], b.lo[1]); y <= std::min(a.hi[1], b.hi[1]); ++y)
         for (std::int64_t z = std::max(a.lo[2], b.lo[2]); z <= std::min(a.hi[2], b.hi[2]); ++z)
-          canonical += isCanonicalCell(p, q, L, g, x, y, z) ? 1 : 0;
+          canonical += isCanonicalCell(p, q, levelScale(L), g, x, y, z) ? 1 : 0;
     EXPECT_EQ(canonical, 1);
   }
   EXPECT_GT(tested, 500);

@@ -25,7 +25,7 @@ void expectEveryTriangleInItsCells(const HashedMesh<S>& hm) {
           const auto* s = h.find(detail::makeCellKey(h.level[i], x, y, z));
           ASSERT_NE(s, nullptr);
           bool found = false;
-          for (std::uint32_t k = 0; k < s->count; ++k) found |= h.entries[s->begin + k] == i;
+          for (std::uint32_t k = 0; k < s->count; ++k) found |= h.entries[s->begin + k].id == i;
           EXPECT_TRUE(found) << "triangle " << i;
         }
   }

@@ -115,7 +115,7 @@ void HierarchicalHash<S>::build(const TriangleMesh<S>& mesh, int threads) {
   for (std::size_t i = 0; i < n; ++i)
     for (std::uint64_t k = offset[i]; k < offset[i + 1]; ++k) {
       const std::uint32_t s = entry_slot[k];
-      entries[slots_[s].begin + fill[s]++] = std::uint32_t(i);
+      entries[slots_[s].begin + fill[s]++] = Entry{boxes[i], diameter[i], std::uint32_t(i)};
     }
 }
 
@@ -133,7 +133,7 @@ HierarchyStats HierarchicalHash<S>::stats() const {
   st.entries = entries.size();
   for (const Slot& s : slots_) st.max_cell_load = std::max<std::size_t>(st.max_cell_load, s.count);
   st.memory_bytes = boxes.size() * sizeof(Aabb<double>) + diameter.size() * sizeof(double) +
-                    level.size() + entries.size() * sizeof(std::uint32_t) +
+                    level.size() + entries.size() * sizeof(Entry) +
                     slots_.size() * sizeof(Slot);
   return st;
 }

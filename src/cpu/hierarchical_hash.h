@@ -13,11 +13,19 @@ namespace kdet_fcl {
 namespace detail {
 
 /// Owning CPU structure. Per triangle: box, enclosing diameter, level. Cells: an open-addressing
-/// table of full 128-bit keys, each slot pointing at a contiguous run of triangle ids in
-/// `entries` (ids in increasing order inside a cell). Memory is linear in the triangle count.
+/// table of full 128-bit keys, each slot pointing at a contiguous run of `entries` (triangle ids
+/// in increasing order inside a cell). Memory is linear in the triangle count.
 template <class S>
 class HierarchicalHash {
  public:
+  /// One (cell, triangle) entry. The triangle's box and diameter are copied next to its id so
+  /// that scanning a cell reads memory sequentially.
+  struct Entry {
+    Aabb<double> box;
+    double diameter;
+    std::uint32_t id;
+  };
+
   struct Slot {
     CellKey key;
     std::uint32_t begin;
@@ -54,7 +62,7 @@ class HierarchicalHash {
   std::uint64_t level_mask = 0;
   int top_level = 0;
   double d_min = 0, d_max = 0;
-  std::vector<std::uint32_t> entries;
+  std::vector<Entry> entries;
 
  private:
   std::vector<Slot> slots_;

@@ -10,7 +10,7 @@ namespace kdet_fcl {
 namespace cpu {
 
 /// Visits every candidate of one query triangle in hierarchy `h`: triangles stored on the query's
-/// level or a coarser one, in cells its box covers, accepted by `accept` (the size rule), whose
+/// level or a coarser one, in cells its box covers, accepted by `accept(id, diameter)` (the size rule), whose
 /// boxes overlap the query box, seen from the canonical cell of that overlap only. Calls
 /// test_and_emit(j) for each; stops (returns false) when it returns false.
 template <class S, class Accept, class TestEmit>
@@ -20,6 +20,7 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
   if (detail::isEmpty(clipped)) return true;
   for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
     if (!h.levelOccupied(L)) continue;
+    const double scale = detail::levelScale(L);
     const detail::CellRange r = detail::cellRange(clipped, L, h.grid);
     for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
       for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
@@ -27,15 +28,14 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
           const auto* slot = h.find(detail::makeCellKey(L, x, y, z));
           if (!slot) continue;
           ++st.cells_visited;
-          const std::uint32_t* ids = h.entries.data() + slot->begin;
+          const auto* cell = h.entries.data() + slot->begin;
           for (std::uint32_t k = 0; k < slot->count; ++k) {
-            const std::uint32_t j = ids[k];
-            if (!accept(j)) continue;
+            const auto& e = cell[k];
+            if (!accept(e.id, e.diameter)) continue;
             ++st.box_tests;
-            const detail::Aabb<double>& bj = h.boxes[j];
-            if (!detail::boxesOverlap(qbox, bj)) continue;
-            if (!detail::isCanonicalCell(qbox, bj, L, h.grid, x, y, z)) continue;
-            if (!test_and_emit(j)) return false;
+            if (!detail::boxesOverlap(qbox, e.box)) continue;
+            if (!detail::isCanonicalCell(qbox, e.box, scale, h.grid, x, y, z)) continue;
+            if (!test_and_emit(e.id)) return false;
           }
         }
   }

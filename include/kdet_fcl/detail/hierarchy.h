@@ -44,15 +44,24 @@ KDET_HD_INLINE int levelFor(double d, const GridParams& g) {
   return l < g.num_levels - 1 ? l : g.num_levels - 1;
 }
 
-/// Cell coordinate of x along `axis` on `level`. Built from monotone rounded operations, so
-/// x <= y implies cellCoord(x) <= cellCoord(y): two overlapping boxes always share a cell, and
-/// the cell of a canonical point of their overlap lies in both boxes' cell ranges.
-KDET_HD_INLINE std::int64_t cellCoord(double x, int axis, int level, const GridParams& g) {
-  const double v = ::ldexp((x - g.origin[axis]) * g.inv_cell0, -level);
+/// 2^-level: the exact factor that turns level-0 cell units into level-`level` units.
+KDET_HD_INLINE double levelScale(int level) { return ::ldexp(1.0, -level); }
+
+/// Cell coordinate of x along `axis` for a level whose levelScale() is `scale`. Built from
+/// monotone rounded operations (the scaling by a power of two is exact), so x <= y implies
+/// cellCoord(x) <= cellCoord(y): two overlapping boxes always share a cell, and the cell of a
+/// canonical point of their overlap lies in both boxes' cell ranges.
+KDET_HD_INLINE std::int64_t cellCoordScaled(double x, int axis, double scale, const GridParams& g) {
+  const double v = ((x - g.origin[axis]) * g.inv_cell0) * scale;
   const double maxc = double((std::int64_t(1) << kCellBits) - 1);
   if (!(v > 0)) return 0;  // also maps NaN to 0 (inputs are validated; this is belt and braces)
   if (v >= maxc) return std::int64_t(maxc);
   return std::int64_t(v);  // v > 0: truncation == floor
+}
+
+/// Cell coordinate of x along `axis` on `level` (see cellCoordScaled).
+KDET_HD_INLINE std::int64_t cellCoord(double x, int axis, int level, const GridParams& g) {
+  return cellCoordScaled(x, axis, levelScale(level), g);
 }
 
 /// A full 128-bit cell key: (level, cx, cy, cz). Keys are compared in full, so hash-bucket
@@ -87,10 +96,11 @@ struct CellRange {
 };
 
 KDET_HD_INLINE CellRange cellRange(const Aabb<double>& b, int level, const GridParams& g) {
+  const double scale = levelScale(level);
   CellRange r;
   for (int a = 0; a < 3; ++a) {
-    r.lo[a] = cellCoord(b.lo[a], a, level, g);
-    r.hi[a] = cellCoord(b.hi[a], a, level, g);
+    r.lo[a] = cellCoordScaled(b.lo[a], a, scale, g);
+    r.hi[a] = cellCoordScaled(b.hi[a], a, scale, g);
   }
   return r;
 }
@@ -98,14 +108,14 @@ KDET_HD_INLINE CellRange cellRange(const Aabb<double>& b, int level, const GridP
 /// Whether the cell (cx, cy, cz) is the canonical cell of the overlap of boxes p and q: the
 /// cell holding the overlap's minimum corner. Exactly one cell of the common range satisfies
 /// this, so each candidate pair is examined once without a de-duplication set.
-KDET_HD_INLINE bool isCanonicalCell(const Aabb<double>& p, const Aabb<double>& q, int level,
+KDET_HD_INLINE bool isCanonicalCell(const Aabb<double>& p, const Aabb<double>& q, double scale,
                                     const GridParams& g, std::int64_t cx, std::int64_t cy,
                                     std::int64_t cz) {
   const double x = p.lo.x > q.lo.x ? p.lo.x : q.lo.x;
   const double y = p.lo.y > q.lo.y ? p.lo.y : q.lo.y;
   const double z = p.lo.z > q.lo.z ? p.lo.z : q.lo.z;
-  return cellCoord(x, 0, level, g) == cx && cellCoord(y, 1, level, g) == cy &&
-         cellCoord(z, 2, level, g) == cz;
+  return cellCoordScaled(x, 0, scale, g) == cx && cellCoordScaled(y, 1, scale, g) == cy &&
+         cellCoordScaled(z, 2, scale, g) == cz;
 }
 
 }  // namespace detail
