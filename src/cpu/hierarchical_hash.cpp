@@ -80,9 +80,10 @@ void HierarchicalHash<S>::build(const TriangleMesh<S>& mesh, int threads) {
     throw InvalidInputError("mesh too large for the hierarchical hash: " + std::to_string(total) +
                             " cell entries");
 
-  // Open addressing with capacity >= 2 * entries keeps probes short; keys are compared in full.
+  // Open addressing with capacity >= 1.25 * entries (>= 1.25 * cells) keeps probes short; keys
+  // are compared in full.
   std::uint64_t capacity = 16;
-  while (capacity < 2 * total) capacity <<= 1;
+  while (capacity < total + total / 4) capacity <<= 1;
   slots_.assign(capacity, Slot{{0, 0}, 0, 0});
   mask_ = capacity - 1;
   std::vector<std::uint32_t> entry_slot(total);
