@@ -39,7 +39,7 @@ KDET_HD_INLINE S squaredNorm(const Vec3<S>& a) {
 
 /// A rigid pose: p_world = R * p_local + t. R is row-major.
 /// setPose() in HashedMesh rejects non-finite entries and R that is not orthonormal within
-/// kOrthonormalTolerance (see docs/numerics.md).
+/// HashedMesh::orthonormalTolerance().
 template <class S>
 struct Transform {
   S R[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};

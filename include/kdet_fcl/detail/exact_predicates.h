@@ -1,0 +1,269 @@
+#pragma once
+/// \file
+/// Exact orientation predicates (orient2d / orient3d) for double coordinates, usable on the host
+/// and on the device.
+///
+/// Each predicate first evaluates the determinant in plain double arithmetic together with a
+/// conservative bound on its rounding error (a "floating-point filter"). When the computed value is
+/// farther from zero than the bound, its sign is certainly right and is returned. Otherwise the
+/// determinant is recomputed exactly as a floating-point expansion (a sum of non-overlapping
+/// doubles, in the spirit of Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast
+/// Robust Geometric Predicates", 1997) and the sign of that expansion is returned.
+///
+/// Validity range (where the returned sign is the exact sign of the determinant of the given
+/// doubles): every coordinate is either 0 or of magnitude in [2^-247, 2^330] (about [4.4e-75,
+/// 2.2e99]). More precisely it suffices that every coordinate is an integer multiple of 2^-300 and
+/// of magnitude at most 2^330: then every partial product of the exact evaluation is a multiple of
+/// 2^-900 (no underflow can lose bits) and at most 2^993 (no overflow). Every float, converted to
+/// double, is inside this range. Outside the range (and for inf/NaN) the functions still terminate,
+/// never read or write out of bounds, and return some value in {-1, 0, +1}, but the sign may be
+/// wrong.
+///
+/// Everything here is branch-light, loop-bounded, recursion-free and allocation-free so the same
+/// code runs in CUDA kernels. The exact part uses only additions, subtractions and explicit fma
+/// calls, so it gives bit-identical answers whether or not the compiler contracts a*b+c (the
+/// filter's bound has slack for contraction too, see orient3dSign()).
+
+#include <cmath>
+
+#include "kdet_fcl/detail/host_device.h"
+#include "kdet_fcl/vec3.h"
+
+/// The exact fallbacks are large (a 192-component expansion, unrolled loops) and rarely run.
+/// Under nvcc, KDET_HD_INLINE means __forceinline__, and force-inlining them at every predicate
+/// call site multiplies device compile time (minutes for one kernel) and register pressure, so they
+/// are kept out of line on the device. On the host `inline` keeps them ODR-safe in a header.
+#if defined(__CUDACC__)
+#define KDET_FCL_HD_NOINLINE __host__ __device__ __noinline__
+#else
+#define KDET_FCL_HD_NOINLINE inline
+#endif
+
+namespace kdet_fcl {
+namespace detail {
+
+/// Converts a point to double coordinates. Exact for float and double inputs (every float is a
+/// double), which is what lets the exact predicates decide float geometry exactly.
+template <class S>
+KDET_HD_INLINE Vec3<double> toDouble(const Vec3<S>& p) {
+  return {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)};
+}
+
+namespace exact {
+
+/// Unit roundoff of double precision (half an ulp of 1), u = 2^-53.
+constexpr double kUnitRoundoff = 1.1102230246251565404e-16;
+
+/// Below this permanent the filter is not trusted: gradual underflow of the products could add
+/// absolute errors that the relative error bound does not cover, so the exact path decides.
+constexpr double kFilterMinPermanent = 1e-250;
+
+/// Absolute value without <cmath> overload questions on the device.
+KDET_HD_INLINE double absd(double a) { return a < 0 ? -a : a; }
+
+/// Fused multiply-add a*b+c with a single rounding; exactness of twoProduct() depends on it, so it
+/// must be a real fma (CUDA's fma and C++'s std::fma both are, never a contracted expression).
+KDET_HD_INLINE double fmad(double a, double b, double c) {
+#if defined(__CUDA_ARCH__)
+  return ::fma(a, b, c);
+#else
+  return std::fma(a, b, c);
+#endif
+}
+
+/// Knuth's TwoSum: s + e == a + b exactly, with s = fl(a + b) (valid for any finite a, b whose sum
+/// does not overflow). Branch-free, so it does not need |a| >= |b|.
+KDET_HD_INLINE void twoSum(double a, double b, double& s, double& e) {
+  s = a + b;
+  const double bv = s - a;   // the part of b that made it into s
+  const double av = s - bv;  // the part of a that made it into s
+  e = (a - av) + (b - bv);
+}
+
+/// TwoDiff: s + e == a - b exactly, with s = fl(a - b).
+KDET_HD_INLINE void twoDiff(double a, double b, double& s, double& e) { twoSum(a, -b, s, e); }
+
+/// TwoProduct via fma: p + e == a * b exactly, with p = fl(a * b), as long as the product neither
+/// overflows nor underflows (guaranteed inside the documented validity range).
+KDET_HD_INLINE void twoProduct(double a, double b, double& p, double& e) {
+  p = a * b;
+  e = fmad(a, b, -p);
+}
+
+/// A non-overlapping expansion with a fixed capacity N, components stored in increasing order of
+/// magnitude, zeros eliminated. Its value is the exact sum of the components.
+template <int N>
+struct Expansion {
+  double c[N];
+  int n = 0;
+
+  /// Adds the double b exactly (Shewchuk's Grow-Expansion with zero elimination). The result stays
+  /// non-overlapping and sorted and grows by at most one component; when the capacity would be
+  /// exceeded (impossible for the callers below, which size N for their worst case) the new
+  /// component is folded into the most significant one instead of writing past the end, so the
+  /// function can never write out of bounds.
+  KDET_HD_INLINE void add(double b) {
+    if (b == 0) return;
+    double q = b;
+    int out = 0;
+    for (int i = 0; i < n; ++i) {
+      double s, e;
+      twoSum(q, c[i], s, e);
+      q = s;
+      if (e != 0) c[out++] = e;  // out <= i, so this never overtakes the read position
+    }
+    if (q != 0) {
+      if (out < N) {
+        c[out++] = q;
+      } else {
+        c[N - 1] += q;  // unreachable for correctly sized N; keeps memory safety unconditional
+      }
+    }
+    n = out;
+  }
+
+  /// Adds the exact product a*b (two components).
+  KDET_HD_INLINE void addProduct(double a, double b) {
+    if (a == 0 || b == 0) return;
+    double p, e;
+    twoProduct(a, b, p, e);
+    add(e);
+    add(p);
+  }
+
+  /// Adds the exact product sign*a*b*d (four components): a*b = p + e exactly, then p*d and e*d
+  /// are each split exactly again.
+  KDET_HD_INLINE void addTripleProduct(double a, double b, double d, double sign) {
+    if (a == 0 || b == 0 || d == 0) return;
+    double p, e;
+    twoProduct(a, b, p, e);
+    double p1, e1;
+    twoProduct(p, d, p1, e1);
+    add(sign * e1);
+    add(sign * p1);
+    if (e != 0) {
+      double p2, e2;
+      twoProduct(e, d, p2, e2);
+      add(sign * e2);
+      add(sign * p2);
+    }
+  }
+
+  /// The sign of the exact value: for a non-overlapping expansion the most significant nonzero
+  /// component dominates the sum of all the others. NaN components (outside the validity range)
+  /// give 0.
+  KDET_HD_INLINE int sign() const {
+    if (n == 0) return 0;
+    const double top = c[n - 1];
+    return top > 0 ? 1 : (top < 0 ? -1 : 0);
+  }
+};
+
+/// The exact sign of (bx-ax)*(cy-ay) - (by-ay)*(cx-ax), always by the exact expansion path.
+/// Exposed for tests and as a reference; prefer orient2dSign(), which filters first.
+KDET_FCL_HD_NOINLINE int orient2dSignExact(double ax, double ay, double bx, double by, double cx,
+                                     double cy) {
+  // Each difference is an exact 2-term expansion (head h, tail t).
+  double uxh, uxt, uyh, uyt, vxh, vxt, vyh, vyt;
+  twoDiff(bx, ax, uxh, uxt);
+  twoDiff(by, ay, uyh, uyt);
+  twoDiff(cx, ax, vxh, vxt);
+  twoDiff(cy, ay, vyh, vyt);
+  const double ux[2] = {uxh, uxt}, uy[2] = {uyh, uyt}, vx[2] = {vxh, vxt}, vy[2] = {vyh, vyt};
+  // Worst case: 2 products * 4 head/tail combinations * 2 components = 16 terms, and
+  // Grow-Expansion adds at most one component per term.
+  Expansion<16> acc;
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      acc.addProduct(ux[i], vy[j]);
+      acc.addProduct(-uy[i], vx[j]);
+    }
+  }
+  return acc.sign();
+}
+
+/// The exact sign of det[b-a; c-a; d-a], always by the exact expansion path.
+/// Exposed for tests and as a reference; prefer orient3dSign(), which filters first.
+KDET_FCL_HD_NOINLINE int orient3dSignExact(const Vec3<double>& a, const Vec3<double>& b,
+                                     const Vec3<double>& c, const Vec3<double>& d) {
+  // Rows u = b-a, v = c-a, w = d-a; each entry an exact 2-term expansion m[row][col][head/tail].
+  double m[3][3][2];
+  const Vec3<double>* rows[3] = {&b, &c, &d};
+  for (int r = 0; r < 3; ++r) {
+    twoDiff(rows[r]->x, a.x, m[r][0][0], m[r][0][1]);
+    twoDiff(rows[r]->y, a.y, m[r][1][0], m[r][1][1]);
+    twoDiff(rows[r]->z, a.z, m[r][2][0], m[r][2][1]);
+  }
+  // Leibniz expansion: det = sum over the 6 permutations s of sgn(s) * m0[s0] m1[s1] m2[s2].
+  const int perm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {1, 0, 2}, {2, 1, 0}};
+  const double psign[6] = {1, 1, 1, -1, -1, -1};
+  // Worst case: 6 permutations * 8 head/tail combinations * 4 components = 192 terms, and
+  // Grow-Expansion adds at most one component per term. Heads are added last so that, when the
+  // tails are zero (the common case), the expansion stays short.
+  Expansion<192> acc;
+  for (int combo = 7; combo >= 0; --combo) {
+    const int i = (combo >> 2) & 1, j = (combo >> 1) & 1, k = combo & 1;
+    for (int s = 0; s < 6; ++s) {
+      acc.addTripleProduct(m[0][perm[s][0]][i], m[1][perm[s][1]][j], m[2][perm[s][2]][k],
+                           psign[s]);
+    }
+  }
+  return acc.sign();
+}
+
+}  // namespace exact
+
+/// The exact sign (-1, 0, +1) of (bx-ax)*(cy-ay) - (by-ay)*(cx-ax): +1 when a, b, c turn
+/// counter-clockwise. Exact inside the validity range documented at the top of this file.
+KDET_HD_INLINE int orient2dSign(double ax, double ay, double bx, double by, double cx, double cy) {
+  const double l = (bx - ax) * (cy - ay);
+  const double r = (by - ay) * (cx - ax);
+  const double det = l - r;
+  const double permanent = exact::absd(l) + exact::absd(r);
+  // Error bound: each of the two products passes through at most 4 roundings (its two input
+  // differences, the product, the subtraction), so |computed - exact| <= gamma_4 times the exact
+  // permanent, and the computed permanent is within a factor (1 +- u)^4 of the exact one.
+  // Shewchuk's sharper analysis gives (3u + 16u^2) * permanent; we use 6u, which also covers fma
+  // contraction (fewer roundings) and the rounding of the bound itself. Inside the validity range
+  // nothing underflows; the minimum-permanent test is extra safety outside it.
+  // `permanent <= 1e308` is false for inf and NaN, so non-finite values fall through.
+  const double bound = 6.0 * exact::kUnitRoundoff * permanent;
+  if (permanent >= exact::kFilterMinPermanent && permanent <= 1e308) {
+    if (det > bound) return 1;
+    if (-det > bound) return -1;
+  }
+  return exact::orient2dSignExact(ax, ay, bx, by, cx, cy);
+}
+
+/// The exact sign (-1, 0, +1) of det[b-a; c-a; d-a] (rows) = dot(cross(b-a, c-a), d-a): positive
+/// when d lies on the side of the plane (a, b, c) that cross(b-a, c-a) points to. Exact inside the
+/// validity range documented at the top of this file.
+KDET_HD_INLINE int orient3dSign(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
+                                const Vec3<double>& d) {
+  const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+  const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+  const double wx = d.x - a.x, wy = d.y - a.y, wz = d.z - a.z;
+  const double vywz = vy * wz, vzwy = vz * wy;
+  const double vzwx = vz * wx, vxwz = vx * wz;
+  const double vxwy = vx * wy, vywx = vy * wx;
+  const double det = ux * (vywz - vzwy) + uy * (vzwx - vxwz) + uz * (vxwy - vywx);
+  const double permanent = exact::absd(ux) * (exact::absd(vywz) + exact::absd(vzwy)) +
+                           exact::absd(uy) * (exact::absd(vzwx) + exact::absd(vxwz)) +
+                           exact::absd(uz) * (exact::absd(vxwy) + exact::absd(vywx));
+  // Error bound: each of the six triple products passes through at most 8 roundings (3 input
+  // differences, 2 products, 1 subtraction, 2 additions), so |computed - exact| <= gamma_8 times
+  // the exact permanent, and the computed permanent is within (1 +- u)^8 of the exact one.
+  // Shewchuk's sharper analysis gives (7u + 56u^2) * permanent; we use 10u, which also covers fma
+  // contraction (fewer roundings) and the rounding of the bound. Inside the validity range no
+  // product underflows; tiny permanents (possible underflow outside it) and non-finite values go to
+  // the exact path anyway.
+  const double bound = 10.0 * exact::kUnitRoundoff * permanent;
+  if (permanent >= exact::kFilterMinPermanent && permanent <= 1e308) {
+    if (det > bound) return 1;
+    if (-det > bound) return -1;
+  }
+  return exact::orient3dSignExact(a, b, c, d);
+}
+
+}  // namespace detail
+}  // namespace kdet_fcl

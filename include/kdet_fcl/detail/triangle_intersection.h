@@ -1,0 +1,292 @@
+#pragma once
+/// \file
+/// The exact closed triangle-triangle intersection test, usable on the host and on the device.
+///
+/// trianglesIntersect() answers whether two CLOSED triangles share at least one point, decided
+/// exactly on the given float/double coordinates: every decision is the sign of an exact
+/// orientation predicate (exact_predicates.h) or an exact coordinate comparison, so touching at a
+/// vertex, along an edge, and coplanar overlap are all reported as intersections (FCL's
+/// semantics), and the CPU and the GPU always agree. Degenerate triangles are valid input: three
+/// collinear points form the segment between the two extreme points, three equal points a point.
+///
+/// The answer is exact inside the validity range of the predicates (coordinates zero or of
+/// magnitude in [2^-247, 2^330]; every float qualifies).
+///
+/// Device code note: most helpers are KDET_HD_INLINE (__forceinline__ under nvcc). The few that
+/// are called at many sites with large bodies (segmentTriangleSigns, segmentsIntersectProj,
+/// pointInTriangleProj, segmentSegment) are KDET_FCL_HD_NOINLINE (plain `inline` on the host,
+/// __noinline__ on the device): force-inlining them made one trianglesIntersect call use 255
+/// registers with spills on sm_90; out of line it needs under 100 and compiles in about a second.
+
+#include "kdet_fcl/detail/exact_predicates.h"
+#include "kdet_fcl/detail/host_device.h"
+#include "kdet_fcl/vec3.h"
+
+namespace kdet_fcl {
+namespace detail {
+namespace tri_isect {
+
+/// The shape a closed triangle actually is once its degeneracies are resolved.
+enum class Kind { Point, Segment, Proper };
+
+/// A classified triangle. For Proper: v[0..2] are the vertices and `axis` is a coordinate (0, 1, 2)
+/// whose projection (dropping that coordinate) keeps the triangle non-degenerate, hence maps its
+/// plane one-to-one onto the coordinate plane. For Segment: v[0], v[1] are the endpoints (distinct).
+/// For Point: v[0].
+struct Shape {
+  Kind kind;
+  int axis;
+  Vec3<double> v[3];
+};
+
+/// The coordinate of p kept first when dropping `axis` (cyclic order keeps orientations consistent
+/// within one projection; consistency across projections is not needed).
+KDET_HD_INLINE double projU(const Vec3<double>& p, int axis) {
+  return axis == 0 ? p.y : (axis == 1 ? p.z : p.x);
+}
+
+/// The coordinate of p kept second when dropping `axis`.
+KDET_HD_INLINE double projV(const Vec3<double>& p, int axis) {
+  return axis == 0 ? p.z : (axis == 1 ? p.x : p.y);
+}
+
+/// Exact orientation of a, b, c projected by dropping coordinate `axis`. Its value is (up to sign
+/// convention) the `axis` component of cross(b-a, c-a), so all three are zero iff a, b, c are
+/// collinear.
+KDET_HD_INLINE int orient2dProj(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
+                                int axis) {
+  return orient2dSign(projU(a, axis), projV(a, axis), projU(b, axis), projV(b, axis),
+                      projU(c, axis), projV(c, axis));
+}
+
+/// Whether a, b, c are exactly collinear (all three coordinate projections have zero area). When
+/// not, `axis` receives a coordinate whose projection keeps them non-collinear.
+KDET_HD_INLINE bool collinear(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
+                              int& axis) {
+  for (int k = 0; k < 3; ++k) {
+    if (orient2dProj(a, b, c, k) != 0) {
+      axis = k;
+      return false;
+    }
+  }
+  return true;
+}
+
+/// A coordinate along which a and b differ (a != b required; returns 0 otherwise). Along a line
+/// through a and b, that coordinate is a strictly monotone function of the position, so comparisons
+/// of it order points on the line exactly.
+KDET_HD_INLINE int differingAxis(const Vec3<double>& a, const Vec3<double>& b) {
+  if (a.x != b.x) return 0;
+  if (a.y != b.y) return 1;
+  if (a.z != b.z) return 2;
+  return 0;
+}
+
+/// Whether value t lies in the closed interval spanned by a and b (in either order).
+KDET_HD_INLINE bool between(double a, double b, double t) {
+  return a <= b ? (a <= t && t <= b) : (b <= t && t <= a);
+}
+
+/// Resolves the degeneracies of the closed triangle (a, b, c).
+KDET_HD_INLINE Shape classify(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c) {
+  Shape s;
+  s.axis = 0;
+  s.v[0] = a;
+  s.v[1] = b;
+  s.v[2] = c;
+  int axis = 0;
+  if (!collinear(a, b, c, axis)) {
+    s.kind = Kind::Proper;
+    s.axis = axis;
+    return s;
+  }
+  if (a == b && b == c) {
+    s.kind = Kind::Point;
+    return s;
+  }
+  // Collinear and not all equal: find a coordinate in which the points are not all equal; along the
+  // common line it orders them, so the extreme points are the endpoints of the segment.
+  int k = differingAxis(a, b);
+  if (a == b) k = differingAxis(a, c);
+  const Vec3<double>* lo = &a;
+  const Vec3<double>* hi = &a;
+  const Vec3<double>* pts[3] = {&a, &b, &c};
+  for (int i = 1; i < 3; ++i) {
+    if ((*pts[i])[k] < (*lo)[k]) lo = pts[i];
+    if ((*pts[i])[k] > (*hi)[k]) hi = pts[i];
+  }
+  s.kind = Kind::Segment;
+  s.v[0] = *lo;
+  s.v[1] = *hi;
+  return s;
+}
+
+/// Whether p lies on the closed segment [s0, s1] (s0 != s1): exactly collinear and between the
+/// endpoints along a coordinate in which they differ.
+KDET_HD_INLINE bool pointOnSegment(const Vec3<double>& p, const Vec3<double>& s0,
+                                   const Vec3<double>& s1) {
+  int unused = 0;
+  if (!collinear(s0, s1, p, unused)) return false;
+  const int k = differingAxis(s0, s1);
+  return between(s0[k], s1[k], p[k]);
+}
+
+/// Closed 2D segment intersection in the projection dropping `axis`; both segments must project
+/// to non-degenerate segments (true when they are non-degenerate and lie in a plane that projects
+/// one-to-one). Uses the 3D coordinates only through exact projections and comparisons.
+KDET_FCL_HD_NOINLINE bool segmentsIntersectProj(const Vec3<double>& p0, const Vec3<double>& p1,
+                                          const Vec3<double>& q0, const Vec3<double>& q1,
+                                          int axis) {
+  const int d1 = orient2dProj(p0, p1, q0, axis);
+  const int d2 = orient2dProj(p0, p1, q1, axis);
+  if (d1 * d2 > 0) return false;  // q strictly on one side of line p
+  const int d3 = orient2dProj(q0, q1, p0, axis);
+  const int d4 = orient2dProj(q0, q1, p1, axis);
+  if (d3 * d4 > 0) return false;  // p strictly on one side of line q
+  if (d1 == 0 && d2 == 0) {
+    // All four points on one line (d1 = d2 = 0 with q0 != q1 forces d3 = d4 = 0): the segments
+    // meet iff their intervals along a coordinate that varies along the line overlap.
+    const double pu0 = projU(p0, axis), pu1 = projU(p1, axis);
+    const bool useU = pu0 != pu1;
+    const double a0 = useU ? pu0 : projV(p0, axis), a1 = useU ? pu1 : projV(p1, axis);
+    const double b0 = useU ? projU(q0, axis) : projV(q0, axis);
+    const double b1 = useU ? projU(q1, axis) : projV(q1, axis);
+    const double alo = a0 < a1 ? a0 : a1, ahi = a0 < a1 ? a1 : a0;
+    const double blo = b0 < b1 ? b0 : b1, bhi = b0 < b1 ? b1 : b0;
+    return alo <= bhi && blo <= ahi;
+  }
+  // The supporting lines are distinct and not parallel-disjoint, so they meet at one point X; each
+  // segment reaches the other's line, which can only happen at X, so X lies on both.
+  return true;
+}
+
+/// Whether p (in the plane of the proper triangle abc) lies in the closed triangle, decided in the
+/// one-to-one projection dropping `axis`: no two edge orientations of strictly opposite sign.
+KDET_FCL_HD_NOINLINE bool pointInTriangleProj(const Vec3<double>& p, const Vec3<double>& a,
+                                        const Vec3<double>& b, const Vec3<double>& c, int axis) {
+  const int s1 = orient2dProj(a, b, p, axis);
+  const int s2 = orient2dProj(b, c, p, axis);
+  const int s3 = orient2dProj(c, a, p, axis);
+  const bool hasPos = s1 > 0 || s2 > 0 || s3 > 0;
+  const bool hasNeg = s1 < 0 || s2 < 0 || s3 < 0;
+  return !(hasPos && hasNeg);
+}
+
+/// Point vs proper triangle: on the plane and inside in the one-to-one projection.
+KDET_HD_INLINE bool pointTriangle(const Vec3<double>& p, const Shape& t) {
+  if (orient3dSign(t.v[0], t.v[1], t.v[2], p) != 0) return false;
+  return pointInTriangleProj(p, t.v[0], t.v[1], t.v[2], t.axis);
+}
+
+/// Closed segment [p, q] (p != q) vs proper triangle t, with op = orient3d(t, p) and
+/// oq = orient3d(t, q) already known (the caller often has them).
+KDET_FCL_HD_NOINLINE bool segmentTriangleSigns(const Vec3<double>& p, const Vec3<double>& q,
+                                         const Shape& t, int op, int oq) {
+  if (op * oq > 0) return false;  // both endpoints strictly on one side of the plane
+  const Vec3<double>& a = t.v[0];
+  const Vec3<double>& b = t.v[1];
+  const Vec3<double>& c = t.v[2];
+  if (op == 0 && oq == 0) {
+    // Coplanar: in the one-to-one projection, p inside or the segment meeting an edge. (If p is
+    // outside, any point of the segment inside the triangle is reached by crossing its boundary.)
+    if (pointInTriangleProj(p, a, b, c, t.axis)) return true;
+    return segmentsIntersectProj(p, q, a, b, t.axis) || segmentsIntersectProj(p, q, b, c, t.axis) ||
+           segmentsIntersectProj(p, q, c, a, t.axis);
+  }
+  // The line pq is transversal to the plane and meets it at one point X inside the closed segment.
+  // X is in the closed triangle iff the line passes the three edges on a consistent side: the
+  // signed volumes with the three edges are never of strictly opposite signs.
+  const int s1 = orient3dSign(p, q, a, b);
+  const int s2 = orient3dSign(p, q, b, c);
+  const int s3 = orient3dSign(p, q, c, a);
+  const bool hasPos = s1 > 0 || s2 > 0 || s3 > 0;
+  const bool hasNeg = s1 < 0 || s2 < 0 || s3 < 0;
+  return !(hasPos && hasNeg);
+}
+
+/// Closed segment [p, q] (p != q) vs proper triangle t.
+KDET_HD_INLINE bool segmentTriangle(const Vec3<double>& p, const Vec3<double>& q, const Shape& t) {
+  const int op = orient3dSign(t.v[0], t.v[1], t.v[2], p);
+  const int oq = orient3dSign(t.v[0], t.v[1], t.v[2], q);
+  return segmentTriangleSigns(p, q, t, op, oq);
+}
+
+/// Closed segment vs closed segment, both non-degenerate.
+KDET_FCL_HD_NOINLINE bool segmentSegment(const Vec3<double>& p0, const Vec3<double>& p1,
+                                   const Vec3<double>& q0, const Vec3<double>& q1) {
+  // Not coplanar: the segments cannot meet.
+  if (orient3dSign(p0, p1, q0, q1) != 0) return false;
+  // Coplanar: find a projection keeping (p0, p1, q0) or (p0, p1, q1) non-collinear; it maps the
+  // common plane one-to-one, so the 2D test is exact for the 3D question.
+  for (int k = 0; k < 3; ++k) {
+    if (orient2dProj(p0, p1, q0, k) != 0 || orient2dProj(p0, p1, q1, k) != 0) {
+      return segmentsIntersectProj(p0, p1, q0, q1, k);
+    }
+  }
+  // q0 and q1 both lie on the line p0p1: compare intervals along a coordinate varying on it.
+  const int k = differingAxis(p0, p1);
+  const double alo = p0[k] < p1[k] ? p0[k] : p1[k], ahi = p0[k] < p1[k] ? p1[k] : p0[k];
+  const double blo = q0[k] < q1[k] ? q0[k] : q1[k], bhi = q0[k] < q1[k] ? q1[k] : q0[k];
+  return alo <= bhi && blo <= ahi;
+}
+
+/// Proper triangle vs proper triangle.
+KDET_HD_INLINE bool properProper(const Shape& P, const Shape& Q) {
+  // Signs of P's vertices against Q's plane, and of Q's vertices against P's plane.
+  int sp[3], sq[3];
+  for (int i = 0; i < 3; ++i) sp[i] = orient3dSign(Q.v[0], Q.v[1], Q.v[2], P.v[i]);
+  if (sp[0] == sp[1] && sp[1] == sp[2] && sp[0] != 0) return false;  // P strictly on one side
+  for (int i = 0; i < 3; ++i) sq[i] = orient3dSign(P.v[0], P.v[1], P.v[2], Q.v[i]);
+  if (sq[0] == sq[1] && sq[1] == sq[2] && sq[0] != 0) return false;  // Q strictly on one side
+  // The triangles meet iff some closed edge of one meets the other closed triangle. Non-coplanar:
+  // both meet the line L of the two planes in closed intervals whose endpoints lie on their edges;
+  // overlapping intervals contain an endpoint of one in the other. Coplanar: two convex polygons
+  // that meet either have crossing edges or one contains a vertex (on an edge) of the other.
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    if (segmentTriangleSigns(P.v[i], P.v[j], Q, sp[i], sp[j])) return true;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    if (segmentTriangleSigns(Q.v[i], Q.v[j], P, sq[i], sq[j])) return true;
+  }
+  return false;
+}
+
+/// Any classified shape vs any other; A.kind <= B.kind in the order Point < Segment < Proper is
+/// not required (the function orders them itself).
+KDET_HD_INLINE bool shapesIntersect(const Shape& A0, const Shape& B0) {
+  // Order so that A is the "smaller" kind; each pair is then handled once.
+  const bool swap = static_cast<int>(A0.kind) > static_cast<int>(B0.kind);
+  const Shape& A = swap ? B0 : A0;
+  const Shape& B = swap ? A0 : B0;
+  switch (A.kind) {
+    case Kind::Point:
+      if (B.kind == Kind::Point) return A.v[0] == B.v[0];
+      if (B.kind == Kind::Segment) return pointOnSegment(A.v[0], B.v[0], B.v[1]);
+      return pointTriangle(A.v[0], B);
+    case Kind::Segment:
+      if (B.kind == Kind::Segment) return segmentSegment(A.v[0], A.v[1], B.v[0], B.v[1]);
+      return segmentTriangle(A.v[0], A.v[1], B);
+    case Kind::Proper:
+    default:
+      return properProper(A, B);
+  }
+}
+
+}  // namespace tri_isect
+
+/// Whether the closed triangles (p0, p1, p2) and (q0, q1, q2) share at least one point, decided
+/// exactly on the given coordinates (S = float or double; converted to double without rounding).
+/// Touching counts; degenerate triangles count as the segment or point they are. Exact inside the
+/// validity range of exact_predicates.h.
+template <class S>
+KDET_HD_INLINE bool trianglesIntersect(const Vec3<S>& p0, const Vec3<S>& p1, const Vec3<S>& p2,
+                                       const Vec3<S>& q0, const Vec3<S>& q1, const Vec3<S>& q2) {
+  const tri_isect::Shape P = tri_isect::classify(toDouble(p0), toDouble(p1), toDouble(p2));
+  const tri_isect::Shape Q = tri_isect::classify(toDouble(q0), toDouble(q1), toDouble(q2));
+  return tri_isect::shapesIntersect(P, Q);
+}
+
+}  // namespace detail
+}  // namespace kdet_fcl

@@ -1,0 +1,135 @@
+#!/usr/bin/env bash
+# Builds kdet_fcl with CUDA on an offline machine with an NVIDIA GPU but without FCL, and runs
+# the CUDA tests and then the whole suite. Needs no network.
+#
+#   scripts/gpu_check.sh [DEBS_ROOT]
+#
+# DEBS_ROOT (default: .fcl-debs/root) is a folder of unpacked Debian packages made by
+# scripts/fetch_fcl_debs.sh on a machine with network access (copy .fcl-debs/ along).
+#
+# Environment:
+#   OUT         where the logs go (default: gpu-logs): nvidia-smi.txt, build.log, ctest.log
+#   BUILD_DIR   build directory (default: build-gpu)
+#   CMAKE_ARGS  extra configure arguments (word-split)
+#   JOBS        parallel build/test jobs (default: nproc)
+# Exit status: 0 when the build and both test runs pass, else non-zero.
+set -uo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+
+DEBS_ROOT="${1:-${FCL_DEBS_ROOT:-.fcl-debs/root}}"
+OUT="${OUT:-gpu-logs}"
+BUILD_DIR="${BUILD_DIR:-build-gpu}"
+CMAKE_ARGS="${CMAKE_ARGS:-}"
+JOBS="${JOBS:-$(nproc 2>/dev/null || echo 4)}"
+ARCH_TRIPLET="x86_64-linux-gnu"
+
+log() { printf '[gpu_check] %s\n' "$*"; }
+die() { printf '[gpu_check] error: %s\n' "$*" >&2; exit 1; }
+
+[[ -d "$DEBS_ROOT/usr" ]] ||
+  die "no unpacked packages at $DEBS_ROOT (run scripts/fetch_fcl_debs.sh on a machine with network and copy .fcl-debs/ here)"
+DEBS_ROOT="$(cd "$DEBS_ROOT" && pwd)"
+LIBDIR="$DEBS_ROOT/usr/lib/$ARCH_TRIPLET"
+[[ -f "$LIBDIR/cmake/fcl/fcl-config.cmake" ]] || die "$LIBDIR/cmake/fcl/fcl-config.cmake is missing"
+
+mkdir -p "$OUT"
+OUT="$(cd "$OUT" && pwd)"
+
+# ---- the machine ---------------------------------------------------------------------------
+{
+  date -u '+%Y-%m-%dT%H:%M:%SZ'
+  uname -a
+  if command -v nvidia-smi >/dev/null 2>&1; then
+    nvidia-smi
+    nvidia-smi --query-gpu=index,name,compute_cap,memory.total,driver_version --format=csv
+  else
+    echo "nvidia-smi: not found"
+  fi
+  if [[ -x /usr/local/cuda/bin/nvcc ]]; then /usr/local/cuda/bin/nvcc --version; fi
+  cmake --version | head -n 1
+} >"$OUT/nvidia-smi.txt" 2>&1
+log "machine description: $OUT/nvidia-smi.txt"
+
+# ---- point the unpacked -dev symlinks whose library was not fetched (libgmp.so -> the
+#      system's libgmp.so.10) at the system's copy --------------------------------------------
+while IFS= read -r -d '' link; do
+  target="$(basename "$(readlink "$link")")"
+  soname="$(sed -E 's/(\.so\.[0-9]+).*/\1/' <<<"$target")"
+  for dir in "/usr/lib/$ARCH_TRIPLET" "/lib/$ARCH_TRIPLET" /usr/lib64 /usr/lib; do
+    if [[ -e "$dir/$soname" ]]; then
+      ln -sfn "$dir/$soname" "$link"
+      log "$(basename "$link") -> $dir/$soname (system copy)"
+      break
+    fi
+  done
+done < <(find "$LIBDIR" -maxdepth 1 -xtype l -print0)
+
+export LD_LIBRARY_PATH="$LIBDIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+
+# ---- configure and build -------------------------------------------------------------------
+cmake_args=(
+  -S "$ROOT" -B "$BUILD_DIR"
+  -DCMAKE_BUILD_TYPE=Release
+  "-DCMAKE_PREFIX_PATH=$DEBS_ROOT/usr"
+  "-Dccd_DIR=$LIBDIR/ccd"
+  "-Doctomap_DIR=$DEBS_ROOT/usr/share/octomap"
+  -DKDET_FCL_CUDA=ON
+  -DCMAKE_CUDA_ARCHITECTURES=90
+  -DKDET_FCL_CUDA_ARCHITECTURES=90
+  # The packaged config files are from CMake 3.x; let a CMake 4 read them.
+  -DCMAKE_POLICY_VERSION_MINIMUM=3.5
+)
+[[ -x /usr/local/cuda/bin/nvcc ]] && cmake_args+=(-DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc)
+# shellcheck disable=SC2206
+extra=(${CMAKE_ARGS})
+
+log "configuring and building $BUILD_DIR (log: $OUT/build.log)"
+{
+  echo "LD_LIBRARY_PATH=$LD_LIBRARY_PATH"
+  echo "+ cmake ${cmake_args[*]} ${extra[*]:-}"
+  cmake "${cmake_args[@]}" ${extra[@]+"${extra[@]}"} &&
+    echo "+ cmake --build $BUILD_DIR --parallel $JOBS" &&
+    cmake --build "$BUILD_DIR" --parallel "$JOBS"
+} >"$OUT/build.log" 2>&1
+build_rc=$?
+if ((build_rc != 0)); then
+  tail -n 40 "$OUT/build.log" >&2
+  die "the build failed (exit $build_rc): see $OUT/build.log"
+fi
+log "build OK"
+
+# ---- tests: the CUDA label first (verbose, to log the device), then everything -------------
+: >"$OUT/ctest.log"
+log "ctest -L cuda (log: $OUT/ctest.log)"
+{
+  echo "==== ctest -L cuda"
+  ctest --test-dir "$BUILD_DIR" -L cuda -V --output-on-failure
+} >>"$OUT/ctest.log" 2>&1
+cuda_rc=$?
+# Zero tests with the label is a failure too: the CUDA tests were not built.
+if grep -q "No tests were found" "$OUT/ctest.log"; then cuda_rc=1; fi
+# On a machine where nvidia-smi sees a GPU, a skipped CUDA test means the runtime found none.
+if command -v nvidia-smi >/dev/null 2>&1 && nvidia-smi -L 2>/dev/null | grep -q '^GPU ' &&
+   grep -q 'Skipped' "$OUT/ctest.log"; then
+  log "nvidia-smi lists a GPU but CUDA tests were skipped"
+  cuda_rc=1
+fi
+log "ctest -L cuda: exit $cuda_rc"
+
+log "ctest (all) (log: $OUT/ctest.log)"
+{
+  echo
+  echo "==== ctest (all)"
+  ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS"
+} >>"$OUT/ctest.log" 2>&1
+all_rc=$?
+log "ctest (all): exit $all_rc"
+grep -E "tests passed|tests failed|The following tests" "$OUT/ctest.log" || true
+
+if ((cuda_rc != 0 || all_rc != 0)); then
+  log "FAILED (see $OUT/ctest.log)"
+  exit 1
+fi
+log "all OK"

@@ -1,0 +1,113 @@
+// Backend selection and CUDA device discovery (include/kdet_fcl/backend.h).
+
+#include "kdet_fcl/backend.h"
+
+#include <string>
+
+#include "kdet_fcl/errors.h"
+
+#ifndef KDET_FCL_HAVE_CUDA
+#define KDET_FCL_HAVE_CUDA 0
+#endif
+
+#if KDET_FCL_HAVE_CUDA
+#include "../cuda/device_info.h"
+#endif
+
+namespace kdet_fcl {
+namespace {
+
+#if KDET_FCL_HAVE_CUDA
+/// The device count and, when it is 0, the reason. Queried once per process: initialising the
+/// CUDA runtime is not free, and the answer does not change while the process runs.
+struct DeviceProbe {
+  int count = 0;
+  std::string error;
+};
+
+const DeviceProbe& probe() {
+  static const DeviceProbe result = [] {
+    DeviceProbe p;
+    try {
+      p.count = cuda_detail::deviceCount(&p.error);
+    } catch (...) {
+      p.count = 0;
+      p.error = "unexpected failure while querying CUDA devices";
+    }
+    if (p.count == 0 && p.error.empty()) p.error = "no CUDA-capable device is detected";
+    return p;
+  }();
+  return result;
+}
+#endif
+
+}  // namespace
+
+bool builtWithCuda() { return KDET_FCL_HAVE_CUDA != 0; }
+
+int cudaDeviceCount() {
+#if KDET_FCL_HAVE_CUDA
+  try {
+    return probe().count;
+  } catch (...) {
+    return 0;
+  }
+#else
+  return 0;
+#endif
+}
+
+std::string cudaDeviceDescription(int device) {
+#if KDET_FCL_HAVE_CUDA
+  try {
+    if (device < 0 || device >= cudaDeviceCount()) return "none";
+    cuda_detail::DeviceInfo info;
+    if (!cuda_detail::deviceInfo(device, &info, nullptr)) return "none";
+    const unsigned long long mib = info.total_memory / (1024ull * 1024ull);
+    return info.name + ", compute capability " + std::to_string(info.major) + "." +
+           std::to_string(info.minor) + ", " + std::to_string(mib) + " MiB";
+  } catch (...) {
+    return "none";
+  }
+#else
+  (void)device;
+  return "none";
+#endif
+}
+
+Backend resolveBackend(Backend requested, std::size_t work_triangles) {
+  // work_triangles will decide Auto once the GPU backend exists (small queries stay on the CPU,
+  // where the launch and transfer overheads do not pay).
+  (void)work_triangles;
+  switch (requested) {
+    case Backend::Cpu:
+      return Backend::Cpu;
+    case Backend::Auto:
+      // There is no GPU query backend yet, so Auto always means the CPU. When the CUDA backend
+      // lands: return Backend::Cuda when cudaDeviceCount() > 0 and work_triangles is above the
+      // measured break-even size.
+      return Backend::Cpu;
+    case Backend::Cuda: {
+#if KDET_FCL_HAVE_CUDA
+      const int count = cudaDeviceCount();
+      if (count == 0) {
+        throw BackendUnavailableError("Backend::Cuda requested but there is no CUDA device: " +
+                                      probe().error);
+      }
+      throw BackendUnavailableError(
+          "Backend::Cuda requested but the CUDA backend is not implemented in this version "
+          "(device 0: " +
+          cudaDeviceDescription(0) + "); use Backend::Cpu or Backend::Auto");
+#else
+      throw BackendUnavailableError(
+          "Backend::Cuda requested but kdet_fcl was built without CUDA (no nvcc at build time; "
+          "reconfigure with -DKDET_FCL_CUDA=ON and a CUDA toolkit); use Backend::Cpu or "
+          "Backend::Auto");
+#endif
+    }
+  }
+  throw InvalidInputError("resolveBackend: unknown Backend value " +
+                          std::to_string(static_cast<int>(requested)));
+}
+
+}  // namespace kdet_fcl

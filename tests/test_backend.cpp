@@ -1,0 +1,74 @@
+// The backend seam: builtWithCuda(), cudaDeviceCount(), cudaDeviceDescription() and
+// resolveBackend() answer consistently with the build configuration and the machine.
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "kdet_fcl/backend.h"
+#include "kdet_fcl/errors.h"
+
+#ifndef KDET_FCL_EXPECT_CUDA
+#error "tests/CMakeLists.txt must define KDET_FCL_EXPECT_CUDA (0 or 1) for test_backend"
+#endif
+
+namespace kdet_fcl {
+namespace {
+
+TEST(Backend, BuiltWithCudaMatchesConfiguration) {
+  EXPECT_EQ(builtWithCuda(), KDET_FCL_EXPECT_CUDA != 0);
+}
+
+TEST(Backend, DeviceCountIsConsistent) {
+  const int count = cudaDeviceCount();
+  EXPECT_GE(count, 0);
+  if (!builtWithCuda()) {
+    EXPECT_EQ(count, 0);
+  }
+  EXPECT_EQ(cudaDeviceCount(), count);  // stable within a process
+}
+
+TEST(Backend, DescriptionNoneWithoutDevice) {
+  const int count = cudaDeviceCount();
+  EXPECT_EQ(cudaDeviceDescription(count), "none");  // one past the last device
+  EXPECT_EQ(cudaDeviceDescription(-1), "none");
+  if (count == 0) {
+    EXPECT_EQ(cudaDeviceDescription(), "none");
+  } else {
+    EXPECT_NE(cudaDeviceDescription(), "none");
+  }
+}
+
+TEST(Backend, CpuAndAutoResolveToCpu) {
+  EXPECT_EQ(resolveBackend(Backend::Cpu, 0), Backend::Cpu);
+  EXPECT_EQ(resolveBackend(Backend::Cpu, 10'000'000), Backend::Cpu);
+  // No GPU query backend exists yet: Auto always runs on the CPU.
+  EXPECT_EQ(resolveBackend(Backend::Auto, 0), Backend::Cpu);
+  EXPECT_EQ(resolveBackend(Backend::Auto, 10'000'000), Backend::Cpu);
+}
+
+TEST(Backend, CudaThrowsWithAReason) {
+  std::string message;
+  try {
+    resolveBackend(Backend::Cuda, 1000);
+    FAIL() << "resolveBackend(Backend::Cuda) returned although the CUDA backend is unavailable";
+  } catch (const BackendUnavailableError& e) {
+    message = e.what();
+  }
+  EXPECT_FALSE(message.empty());
+  if (!builtWithCuda()) {
+    EXPECT_NE(message.find("built without CUDA"), std::string::npos) << message;
+  } else if (cudaDeviceCount() == 0) {
+    EXPECT_NE(message.find("no CUDA device: "), std::string::npos) << message;
+  } else {
+    EXPECT_NE(message.find("not implemented"), std::string::npos) << message;
+  }
+}
+
+TEST(Backend, CudaErrorIsAKdetError) {
+  // Callers can catch every library failure as kdet_fcl::Error.
+  EXPECT_THROW(resolveBackend(Backend::Cuda), Error);
+}
+
+}  // namespace
+}  // namespace kdet_fcl

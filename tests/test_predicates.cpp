@@ -1,0 +1,330 @@
+// Exact orientation predicates vs. an exact rational (GMP) referee.
+#include <gmpxx.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+
+#include "kdet_fcl/detail/exact_predicates.h"
+
+namespace {
+
+using kdet_fcl::Vec3;
+using kdet_fcl::detail::orient2dSign;
+using kdet_fcl::detail::orient3dSign;
+using kdet_fcl::detail::exact::orient2dSignExact;
+using kdet_fcl::detail::exact::orient3dSignExact;
+using V = Vec3<double>;
+
+/// Exact rational from a double (mpq_set_d is exact).
+mpq_class Q(double v) { return mpq_class(v); }
+
+/// The sign of an exact rational as -1, 0, +1.
+int refSign(const mpq_class& v) {
+  const int s = mpq_sgn(v.get_mpq_t());
+  return s > 0 ? 1 : (s < 0 ? -1 : 0);
+}
+
+/// Exact sign of det[b-a; c-a; d-a] in rational arithmetic.
+int refOrient3d(const V& a, const V& b, const V& c, const V& d) {
+  const mpq_class ux = Q(b.x) - Q(a.x), uy = Q(b.y) - Q(a.y), uz = Q(b.z) - Q(a.z);
+  const mpq_class vx = Q(c.x) - Q(a.x), vy = Q(c.y) - Q(a.y), vz = Q(c.z) - Q(a.z);
+  const mpq_class wx = Q(d.x) - Q(a.x), wy = Q(d.y) - Q(a.y), wz = Q(d.z) - Q(a.z);
+  const mpq_class det =
+      ux * (vy * wz - vz * wy) + uy * (vz * wx - vx * wz) + uz * (vx * wy - vy * wx);
+  return refSign(det);
+}
+
+/// Exact sign of (bx-ax)(cy-ay) - (by-ay)(cx-ax).
+int refOrient2d(double ax, double ay, double bx, double by, double cx, double cy) {
+  const mpq_class det = (Q(bx) - Q(ax)) * (Q(cy) - Q(ay)) - (Q(by) - Q(ay)) * (Q(cx) - Q(ax));
+  return refSign(det);
+}
+
+/// Counts of referee outcomes, so each test can assert that it really exercised all signs.
+struct Tally {
+  int pos = 0, neg = 0, zero = 0;
+  void add(int s) { (s > 0 ? pos : (s < 0 ? neg : zero))++; }
+};
+
+/// Checks the filtered and the always-exact predicate against the referee for one 3D case and the
+/// 2D predicate on the xy, yz and zx projections of (a, b, c) and of (a, b, d).
+void checkCase(const V& a, const V& b, const V& c, const V& d, Tally* t3 = nullptr,
+               Tally* t2 = nullptr) {
+  const int r3 = refOrient3d(a, b, c, d);
+  if (t3) t3->add(r3);
+  ASSERT_EQ(orient3dSign(a, b, c, d), r3) << "a=" << a.x << "," << a.y << "," << a.z;
+  ASSERT_EQ(orient3dSignExact(a, b, c, d), r3);
+  // Permutation parity: swapping two rows flips the sign; a cyclic shift of (a,b,c,d) of an
+  // orientation of 4 points flips it too (odd permutation of 4 elements).
+  ASSERT_EQ(orient3dSign(b, a, c, d), -r3);
+  ASSERT_EQ(orient3dSign(b, c, d, a), -r3);
+  const V pts[4] = {a, b, c, d};
+  for (int k = 0; k < 3; ++k) {
+    const int i = k, j = (k + 1) % 3;
+    for (int last = 2; last <= 3; ++last) {
+      const double ax = pts[0][i], ay = pts[0][j], bx = pts[1][i], by = pts[1][j],
+                   cx = pts[last][i], cy = pts[last][j];
+      const int r2 = refOrient2d(ax, ay, bx, by, cx, cy);
+      if (t2) t2->add(r2);
+      ASSERT_EQ(orient2dSign(ax, ay, bx, by, cx, cy), r2);
+      ASSERT_EQ(orient2dSignExact(ax, ay, bx, by, cx, cy), r2);
+      ASSERT_EQ(orient2dSign(bx, by, ax, ay, cx, cy), -r2);
+    }
+  }
+}
+
+V offsetScale(const V& p, double offset, double scale) {
+  return {offset + p.x * scale, offset + p.y * scale, offset + p.z * scale};
+}
+
+/// Whether P == offset + p * scale holds exactly (componentwise, in rationals).
+bool exactlyOffsetScaled(const V& p, const V& P, double offset, double scale) {
+  for (int k = 0; k < 3; ++k)
+    if (Q(P[k]) != Q(offset) + Q(p[k]) * Q(scale)) return false;
+  return true;
+}
+
+/// Offsets and scales the test families run at: far from the origin and tiny.
+const double kOffsets[] = {0.0, 1e3, 1e5, 1e7, -3.5e7};
+const double kScales[] = {1.0, 1e-6, 0x1p-20, 1e3};
+
+TEST(Predicates, RandomPointsMatchReferee) {
+  std::mt19937_64 rng(12345);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  Tally t3, t2;
+  for (double off : kOffsets) {
+    for (double sc : kScales) {
+      for (int it = 0; it < 400; ++it) {
+        auto rp = [&] { return offsetScale(V{U(rng), U(rng), U(rng)}, off, sc); };
+        checkCase(rp(), rp(), rp(), rp(), &t3, &t2);
+        if (HasFatalFailure()) return;
+      }
+    }
+  }
+  EXPECT_GT(t3.pos, 1000);
+  EXPECT_GT(t3.neg, 1000);
+  EXPECT_GT(t2.pos, 1000);
+  EXPECT_GT(t2.neg, 1000);
+}
+
+TEST(Predicates, ExactlyCoplanarAndCollinearAreZero) {
+  // d = a + s(b-a) + t(c-a) with small integers: exactly representable, exactly coplanar, also
+  // after adding a large integer offset or multiplying by a power of two. Collinear 2D triples are
+  // built the same way with t = 0.
+  std::mt19937_64 rng(777);
+  std::uniform_int_distribution<int> I(-50, 50), S(-4, 4);
+  const double offsets[] = {0.0, 1e3, 1e5, 1e7, -1e7};
+  const double scales[] = {1.0, 0x1p-30, 0x1p40, 0x1p-200, 0x1p250};
+  Tally t3, t2;
+  int cases = 0;
+  for (double off : offsets) {
+    for (double sc : scales) {
+      for (int it = 0; it < 300; ++it) {
+        const V a{double(I(rng)), double(I(rng)), double(I(rng))};
+        const V b{double(I(rng)), double(I(rng)), double(I(rng))};
+        const V c{double(I(rng)), double(I(rng)), double(I(rng))};
+        const double s = S(rng), t = S(rng);
+        const V d = a + (b - a) * s + (c - a) * t;
+        const V A = offsetScale(a, off, sc), B = offsetScale(b, off, sc),
+                C = offsetScale(c, off, sc), D = offsetScale(d, off, sc);
+        // Skip the combinations where offset + scale * integer is not representable (e.g. 1e7 with
+        // 2^-30 steps); everything else is an exact construction.
+        if (!exactlyOffsetScaled(a, A, off, sc) || !exactlyOffsetScaled(b, B, off, sc) ||
+            !exactlyOffsetScaled(c, C, off, sc) || !exactlyOffsetScaled(d, D, off, sc)) {
+          continue;
+        }
+        ASSERT_EQ(refOrient3d(A, B, C, D), 0);  // the construction is exact
+        checkCase(A, B, C, D, &t3, &t2);
+        if (HasFatalFailure()) return;
+        // Collinear: c' = a + s(b-a).
+        const V e = a + (b - a) * s;
+        const V E = offsetScale(e, off, sc);
+        if (!exactlyOffsetScaled(e, E, off, sc)) continue;
+        for (int k = 0; k < 3; ++k) {
+          const int j = (k + 1) % 3;
+          ASSERT_EQ(refOrient2d(A[k], A[j], B[k], B[j], E[k], E[j]), 0);
+          ASSERT_EQ(orient2dSign(A[k], A[j], B[k], B[j], E[k], E[j]), 0);
+          ASSERT_EQ(orient2dSignExact(A[k], A[j], B[k], B[j], E[k], E[j]), 0);
+        }
+        ASSERT_EQ(orient3dSign(A, B, E, C), 0);  // collinear triple: any fourth point is coplanar
+        ++cases;
+      }
+    }
+  }
+  EXPECT_GT(cases, 3000);
+  EXPECT_GT(t3.zero, 3000);
+}
+
+TEST(Predicates, OneUlpPerturbationsMatchReferee) {
+  // Exactly coplanar points with one coordinate moved by one ulp up or down: the true sign is
+  // nonzero (usually) but far below what the double evaluation can resolve.
+  std::mt19937_64 rng(4242);
+  std::uniform_int_distribution<int> I(-1000, 1000), S(-3, 3), W(0, 11);
+  Tally t3, t2;
+  int cases = 0;
+  for (double off : kOffsets) {
+    for (double sc : {1.0, 0x1p-20, 0x1p10}) {
+      for (int it = 0; it < 300; ++it) {
+        const V a{double(I(rng)), double(I(rng)), double(I(rng))};
+        const V b{double(I(rng)), double(I(rng)), double(I(rng))};
+        const V c{double(I(rng)), double(I(rng)), double(I(rng))};
+        const V d = a + (b - a) * double(S(rng)) + (c - a) * double(S(rng));
+        V P[4] = {offsetScale(a, off, sc), offsetScale(b, off, sc), offsetScale(c, off, sc),
+                  offsetScale(d, off, sc)};
+        // Perturb a nonzero coordinate: nextafter(0) is subnormal, outside the validity range.
+        int which = W(rng);
+        for (int tries = 0; tries < 12 && P[which / 3][which % 3] == 0; ++tries)
+          which = (which + 1) % 12;
+        double& coord = P[which / 3][which % 3];  // non-const Vec3::operator[] is a reference
+        coord = std::nextafter(coord, (it & 1) ? INFINITY : -INFINITY);
+        checkCase(P[0], P[1], P[2], P[3], &t3, &t2);
+        if (HasFatalFailure()) return;
+        ++cases;
+      }
+    }
+  }
+  EXPECT_GT(cases, 4000);
+  EXPECT_GT(t3.pos, 500);
+  EXPECT_GT(t3.neg, 500);
+}
+
+TEST(Predicates, Orient2dOneUlpFromCollinearMatchesReferee) {
+  // Exactly collinear 2D triples (integers, offsets, power-of-two scales) with one coordinate moved
+  // by one ulp, and triples rounded onto a line.
+  std::mt19937_64 rng(2024);
+  std::uniform_int_distribution<int> I(-1000, 1000), S(-5, 5), W(0, 5);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  Tally t2;
+  for (double off : kOffsets) {
+    for (double sc : {1.0, 0x1p-20, 1e-6}) {
+      for (int it = 0; it < 400; ++it) {
+        const double ax = off + sc * I(rng), ay = off + sc * I(rng);
+        const double bx = off + sc * I(rng), by = off + sc * I(rng);
+        const double s = (it & 2) ? double(S(rng)) : U(rng);
+        double p[6] = {ax, ay, bx, by, ax + s * (bx - ax), ay + s * (by - ay)};
+        if (it & 1) {
+          int which = W(rng);
+          for (int tries = 0; tries < 6 && p[which] == 0; ++tries) which = (which + 1) % 6;
+          p[which] = std::nextafter(p[which], (it & 4) ? INFINITY : -INFINITY);
+        }
+        const int r = refOrient2d(p[0], p[1], p[2], p[3], p[4], p[5]);
+        t2.add(r);
+        ASSERT_EQ(orient2dSign(p[0], p[1], p[2], p[3], p[4], p[5]), r);
+        ASSERT_EQ(orient2dSignExact(p[0], p[1], p[2], p[3], p[4], p[5]), r);
+        ASSERT_EQ(orient2dSign(p[2], p[3], p[4], p[5], p[0], p[1]), r);  // cyclic invariance
+      }
+    }
+  }
+  EXPECT_GT(t2.zero, 500);
+  EXPECT_GT(t2.pos, 500);
+  EXPECT_GT(t2.neg, 500);
+}
+
+TEST(Predicates, NearCoplanarRoundedConstructionsMatchReferee) {
+  // d = a + s(b-a) + t(c-a) with real s, t, evaluated in double: within a few ulps of the plane,
+  // often exactly on it, and with mixed magnitudes (1e-6 .. 1e7) the coordinate differences are
+  // not exact, so the exact path has to handle nonzero tails.
+  std::mt19937_64 rng(99);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  Tally t3, t2;
+  for (double off : kOffsets) {
+    for (double sc : kScales) {
+      for (int it = 0; it < 250; ++it) {
+        const V a = offsetScale(V{U(rng), U(rng), U(rng)}, off, sc);
+        // Mixed magnitude: b near the origin when a is far away.
+        const V b = (it % 3 == 0) ? V{U(rng) * 1e-6, U(rng) * 1e-3, U(rng)}
+                                  : offsetScale(V{U(rng), U(rng), U(rng)}, off, sc);
+        const V c = offsetScale(V{U(rng), U(rng), U(rng)}, off, sc);
+        const double s = U(rng), t = U(rng);
+        const V d{a.x + s * (b.x - a.x) + t * (c.x - a.x), a.y + s * (b.y - a.y) + t * (c.y - a.y),
+                  a.z + s * (b.z - a.z) + t * (c.z - a.z)};
+        checkCase(a, b, c, d, &t3, &t2);
+        if (HasFatalFailure()) return;
+        // 2D: a point rounded onto the line ab.
+        const double px = a.x + s * (b.x - a.x), py = a.y + s * (b.y - a.y);
+        ASSERT_EQ(orient2dSign(a.x, a.y, b.x, b.y, px, py), refOrient2d(a.x, a.y, b.x, b.y, px, py));
+      }
+    }
+  }
+  EXPECT_GT(t3.pos, 200);
+  EXPECT_GT(t3.neg, 200);
+}
+
+TEST(Predicates, ExtremeScalesInsideValidityRange) {
+  // Coordinates near the ends of the documented range: random 53-bit mantissas at 2^-240 and 2^300,
+  // with near-coplanar fourth points; mixed-exponent differences give long expansions.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  Tally t3;
+  for (double sc : {0x1p-240, 0x1p300, 0x1p-100, 0x1p100}) {
+    for (int it = 0; it < 500; ++it) {
+      auto rp = [&] { return V{U(rng) * sc, U(rng) * sc * 0x1p-20, U(rng) * sc}; };
+      const V a = rp(), b = rp(), c = rp();
+      const double s = U(rng), t = U(rng);
+      const V d{a.x + s * (b.x - a.x) + t * (c.x - a.x), a.y + s * (b.y - a.y) + t * (c.y - a.y),
+                a.z + s * (b.z - a.z) + t * (c.z - a.z)};
+      checkCase(a, b, c, d, &t3, nullptr);
+      if (HasFatalFailure()) return;
+    }
+  }
+  EXPECT_GT(t3.pos + t3.neg, 100);
+}
+
+TEST(Predicates, WorstCaseTailsExactPath) {
+  // Every coordinate difference has a nonzero tail (1 + tiny vs. large values), so the exact path
+  // builds the longest expansions; compare the always-exact function with the referee, including
+  // exactly-zero determinants obtained by repeating a point.
+  std::mt19937_64 rng(31337);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::uniform_int_distribution<int> E(-40, 40);
+  Tally t3;
+  for (int it = 0; it < 3000; ++it) {
+    auto coord = [&] { return std::ldexp(U(rng), E(rng)); };
+    const V a{coord(), coord(), coord()}, b{coord(), coord(), coord()},
+        c{coord(), coord(), coord()};
+    V d{coord(), coord(), coord()};
+    if (it % 10 == 0) d = b;  // exactly degenerate
+    const int r = refOrient3d(a, b, c, d);
+    t3.add(r);
+    ASSERT_EQ(orient3dSignExact(a, b, c, d), r);
+    ASSERT_EQ(orient3dSign(a, b, c, d), r);
+    ASSERT_EQ(orient2dSignExact(a.x, a.y, b.x, b.y, c.x, c.y),
+              refOrient2d(a.x, a.y, b.x, b.y, c.x, c.y));
+  }
+  EXPECT_GT(t3.zero, 200);
+  EXPECT_GT(t3.pos, 500);
+  EXPECT_GT(t3.neg, 500);
+}
+
+TEST(Predicates, SignConventions) {
+  const V a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+  // cross(b-a, c-a) = +z: a point above is positive.
+  EXPECT_EQ(orient3dSign(a, b, c, V{0, 0, 1}), 1);
+  EXPECT_EQ(orient3dSign(a, b, c, V{0.3, 0.3, -1e-300}), -1);
+  EXPECT_EQ(orient3dSign(a, b, c, V{5, -7, 0}), 0);
+  EXPECT_EQ(orient2dSign(0, 0, 1, 0, 0, 1), 1);   // counter-clockwise
+  EXPECT_EQ(orient2dSign(0, 0, 0, 1, 1, 0), -1);  // clockwise
+  EXPECT_EQ(orient2dSign(0, 0, 1, 1, 3, 3), 0);
+  // toDouble is exact for floats.
+  const Vec3<float> f{0.1f, -3.25f, 1e-30f};
+  const V fd = kdet_fcl::detail::toDouble(f);
+  EXPECT_EQ(fd.x, double(0.1f));
+  EXPECT_EQ(fd.y, -3.25);
+  EXPECT_EQ(fd.z, double(1e-30f));
+}
+
+TEST(Predicates, NonFiniteInputTerminates) {
+  // Outside the validity range the answer is unspecified, but the call must terminate and return
+  // a value in {-1, 0, 1}.
+  const double bad[] = {INFINITY, -INFINITY, NAN, 1e308, 1e-320};
+  for (double v : bad) {
+    const int s3 = orient3dSign(V{v, 0, 0}, V{1, v, 0}, V{0, 1, v}, V{v, v, 1});
+    EXPECT_TRUE(s3 >= -1 && s3 <= 1);
+    const int s2 = orient2dSign(v, 0, 1, v, 0, 1);
+    EXPECT_TRUE(s2 >= -1 && s2 <= 1);
+  }
+}
+
+}  // namespace
