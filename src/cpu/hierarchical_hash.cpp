@@ -87,6 +87,7 @@ void HierarchicalHash<S>::build(const TriangleMesh<S>& mesh, int threads) {
   slots_.assign(capacity, Slot{{0, 0}, 0, 0});
   mask_ = capacity - 1;
   std::vector<std::uint32_t> entry_slot(total);
+  std::vector<std::uint8_t> entry_mask(total);
   // Sequential insertion in triangle order: the table layout (and so every output order) is
   // independent of the thread count.
   for (std::size_t i = 0; i < n; ++i) {
@@ -103,6 +104,8 @@ void HierarchicalHash<S>::build(const TriangleMesh<S>& mesh, int threads) {
             ++cells_;
           }
           ++slots_[s].count;
+          entry_mask[k] = std::uint8_t((x == r.lo[0] ? 1 : 0) | (y == r.lo[1] ? 2 : 0) |
+                                       (z == r.lo[2] ? 4 : 0));
           entry_slot[k++] = std::uint32_t(s);
         }
   }
@@ -112,11 +115,19 @@ void HierarchicalHash<S>::build(const TriangleMesh<S>& mesh, int threads) {
     running += s.count;
   }
   entries.resize(total);
+  // Fill cells in order of decreasing diameter (ties: increasing id), so every cell lists its
+  // triangles largest first and a lookup can stop at the first triangle smaller than the query.
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return diameter[a] != diameter[b] ? diameter[a] > diameter[b] : a < b;
+  });
   std::vector<std::uint32_t> fill(capacity, 0);
-  for (std::size_t i = 0; i < n; ++i)
+  for (const std::uint32_t i : order)
     for (std::uint64_t k = offset[i]; k < offset[i + 1]; ++k) {
       const std::uint32_t s = entry_slot[k];
-      entries[slots_[s].begin + fill[s]++] = Entry{boxes[i], diameter[i], std::uint32_t(i)};
+      entries[slots_[s].begin + fill[s]++] =
+          Entry{boxes[i], diameter[i], std::uint32_t(i), entry_mask[k]};
     }
 }
 

@@ -13,8 +13,8 @@ namespace kdet_fcl {
 namespace detail {
 
 /// Owning CPU structure. Per triangle: box, enclosing diameter, level. Cells: an open-addressing
-/// table of full 128-bit keys, each slot pointing at a contiguous run of `entries` (triangle ids
-/// in increasing order inside a cell). Memory is linear in the triangle count.
+/// table of full 128-bit keys, each slot pointing at a contiguous run of `entries`, sorted by
+/// decreasing diameter (ties: increasing id) inside a cell. Memory is linear in the triangle count.
 template <class S>
 class HierarchicalHash {
  public:
@@ -24,6 +24,9 @@ class HierarchicalHash {
     Aabb<double> box;
     double diameter;
     std::uint32_t id;
+    /// Bit a set: this cell is the first of the triangle's cells along axis a. Then the
+    /// canonical-cell test of a lookup (see scan.h) is three integer comparisons.
+    std::uint8_t lo_mask;
   };
 
   struct Slot {

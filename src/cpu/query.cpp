@@ -135,7 +135,7 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
             detail::triangleBox<double>(va[ta[i][0]], va[ta[i][1]], va[ta[i][2]]);
         const auto ui = std::uint32_t(i);
         const bool go = scanCandidates(
-            hb, q, di, [&](std::uint32_t, double dj) { return dj >= di; },
+            hb, q, di, [&](std::uint32_t, double dj) { return dj >= di ? 1 : -1; },
             [&](std::uint32_t j) {
               ++st.triangle_tests;
               return exact(ui, j) ? emit({ui, j}) : true;
@@ -167,7 +167,7 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
         }
         const auto uj = std::uint32_t(j);
         const bool go = scanCandidates(
-            ha, q, dj, [&](std::uint32_t, double di) { return di > dj; },
+            ha, q, dj, [&](std::uint32_t, double di) { return di > dj ? 1 : -1; },
             [&](std::uint32_t i) {
               ++st.triangle_tests;
               return exact(i, uj) ? emit({i, uj}) : true;
@@ -208,7 +208,7 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
       // The larger triangle of each pair is the one with the larger (diameter, index).
       const bool go = scanCandidates(
           h, h.boxes[i], di,
-          [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > ui); },
+          [&](std::uint32_t j, double dj) { return dj > di ? 1 : (dj == di ? (j > ui ? 1 : 0) : -1); },
           [&](std::uint32_t j) {
             if (sharesVertex(ui, j)) return true;
             ++st.triangle_tests;

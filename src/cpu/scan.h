@@ -10,7 +10,9 @@ namespace kdet_fcl {
 namespace cpu {
 
 /// Visits every candidate of one query triangle in hierarchy `h`: triangles stored on the query's
-/// level or a coarser one, in cells its box covers, accepted by `accept(id, diameter)` (the size rule), whose
+/// level or a coarser one, in cells its box covers, accepted by `accept(id, diameter)` (the size rule: it returns 1 to test the triangle, 0 to
+/// skip it, -1 when it and every later triangle of the cell are too small — cells list their
+/// triangles by decreasing diameter), whose
 /// boxes overlap the query box, seen from the canonical cell of that overlap only. Calls
 /// test_and_emit(j) for each; stops (returns false) when it returns false.
 template <class S, class Accept, class TestEmit>
@@ -20,7 +22,6 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
   if (detail::isEmpty(clipped)) return true;
   for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
     if (!h.levelOccupied(L)) continue;
-    const double scale = detail::levelScale(L);
     const detail::CellRange r = detail::cellRange(clipped, L, h.grid);
     for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
       for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
@@ -31,10 +32,18 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
           const auto* cell = h.entries.data() + slot->begin;
           for (std::uint32_t k = 0; k < slot->count; ++k) {
             const auto& e = cell[k];
-            if (!accept(e.id, e.diameter)) continue;
+            const int verdict = accept(e.id, e.diameter);
+            if (verdict < 0) break;  // the rest of the cell is smaller still
+            if (verdict == 0) continue;
             ++st.box_tests;
             if (!detail::boxesOverlap(qbox, e.box)) continue;
-            if (!detail::isCanonicalCell(qbox, e.box, scale, h.grid, x, y, z)) continue;
+            // The canonical cell holds the overlap's minimum corner. cellCoord is monotone, so its
+            // coordinate on each axis is max(first cell of the query, first cell of the
+            // candidate): this is that cell iff on every axis it is the candidate's first cell or
+            // the query's (r.lo is the query's first cell: clipping to the bounds never moves it).
+            if (!(((e.lo_mask & 1) || x == r.lo[0]) && ((e.lo_mask & 2) || y == r.lo[1]) &&
+                  ((e.lo_mask & 4) || z == r.lo[2])))
+              continue;
             if (!test_and_emit(e.id)) return false;
           }
         }

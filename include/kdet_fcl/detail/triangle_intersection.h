@@ -283,8 +283,19 @@ KDET_HD_INLINE bool shapesIntersect(const Shape& A0, const Shape& B0) {
 template <class S>
 KDET_HD_INLINE bool trianglesIntersect(const Vec3<S>& p0, const Vec3<S>& p1, const Vec3<S>& p2,
                                        const Vec3<S>& q0, const Vec3<S>& q1, const Vec3<S>& q2) {
-  const tri_isect::Shape P = tri_isect::classify(toDouble(p0), toDouble(p1), toDouble(p2));
-  const tri_isect::Shape Q = tri_isect::classify(toDouble(q0), toDouble(q1), toDouble(q2));
+  const Vec3<double> P0 = toDouble(p0), P1 = toDouble(p1), P2 = toDouble(p2);
+  const Vec3<double> Q0 = toDouble(q0), Q1 = toDouble(q1), Q2 = toDouble(q2);
+  // Fast exact rejection before any classification (most candidate pairs end here): all of one
+  // triangle strictly on one side of the other's plane. A degenerate triangle has no plane: its
+  // orientations are all zero, so it never rejects here and is handled below.
+  const int a0 = orient3dSign(Q0, Q1, Q2, P0);
+  if (a0 != 0 && orient3dSign(Q0, Q1, Q2, P1) == a0 && orient3dSign(Q0, Q1, Q2, P2) == a0)
+    return false;
+  const int b0 = orient3dSign(P0, P1, P2, Q0);
+  if (b0 != 0 && orient3dSign(P0, P1, P2, Q1) == b0 && orient3dSign(P0, P1, P2, Q2) == b0)
+    return false;
+  const tri_isect::Shape P = tri_isect::classify(P0, P1, P2);
+  const tri_isect::Shape Q = tri_isect::classify(Q0, Q1, Q2);
   return tri_isect::shapesIntersect(P, Q);
 }
 
