@@ -14,7 +14,8 @@ template <class S>
 std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
                                                     const Transform<S>& pose_a,
                                                     const TriangleMesh<S>& b,
-                                                    const Transform<S>& pose_b) {
+                                                    const Transform<S>& pose_b,
+                                                    Predicate predicate) {
   a.validate(false, "bruteForceIntersectMeshes: first mesh");
   b.validate(false, "bruteForceIntersectMeshes: second mesh");
   const detail::RelativePose rp = detail::relativePose(pose_a, pose_b);
@@ -26,7 +27,7 @@ std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
     const Triangle& ti = a.triangles[i];
     for (std::size_t j = 0; j < b.triangles.size(); ++j) {
       const Triangle& tj = b.triangles[j];
-      if (detail::trianglesIntersect(va[ti[0]], va[ti[1]], va[ti[2]], b.vertices[tj[0]],
+      if (detail::trianglesIntersect(predicate, va[ti[0]], va[ti[1]], va[ti[2]], b.vertices[tj[0]],
                                      b.vertices[tj[1]], b.vertices[tj[2]]))
         out.push_back({std::uint32_t(i), std::uint32_t(j)});
     }
@@ -35,7 +36,7 @@ std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
 }
 
 template <class S>
-std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& m) {
+std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& m, Predicate predicate) {
   m.validate(false, "bruteForceIntersectSelf");
   const auto& v = m.vertices;
   std::vector<TrianglePair> out;
@@ -47,7 +48,7 @@ std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& m) {
       for (int p = 0; p < 3; ++p)
         for (int q = 0; q < 3; ++q)
           adjacent = adjacent || ti[p] == tj[q] || v[ti[p]] == v[tj[q]];
-      if (!adjacent && detail::trianglesIntersect(v[ti[0]], v[ti[1]], v[ti[2]], v[tj[0]],
+      if (!adjacent && detail::trianglesIntersect(predicate, v[ti[0]], v[ti[1]], v[ti[2]], v[tj[0]],
                                                   v[tj[1]], v[tj[2]]))
         out.push_back({std::uint32_t(i), std::uint32_t(j)});
     }
@@ -58,12 +59,14 @@ std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& m) {
 template std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<float>&,
                                                              const Transform<float>&,
                                                              const TriangleMesh<float>&,
-                                                             const Transform<float>&);
+                                                             const Transform<float>&,
+                                                             Predicate);
 template std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<double>&,
                                                              const Transform<double>&,
                                                              const TriangleMesh<double>&,
-                                                             const Transform<double>&);
-template std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<float>&);
-template std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<double>&);
+                                                             const Transform<double>&,
+                                                             Predicate);
+template std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<float>&, Predicate);
+template std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<double>&, Predicate);
 
 }  // namespace kdet_fcl

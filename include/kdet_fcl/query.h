@@ -8,6 +8,7 @@
 
 #include "kdet_fcl/backend.h"
 #include "kdet_fcl/hashed_mesh.h"
+#include "kdet_fcl/predicate.h"
 
 namespace kdet_fcl {
 
@@ -21,6 +22,9 @@ struct QueryOptions {
   int threads = 0;
   /// Which backend runs the query.
   Backend backend = Backend::Cpu;
+  /// How candidate pairs are decided (Exact: the exact closed-triangle test; Double/Float: the
+  /// same test in plain floating point, faster and inexact near degeneracies).
+  Predicate predicate = Predicate::Exact;
 };
 
 /// One intersecting pair: triangle `a` of the first mesh and triangle `b` of the second (for a
@@ -68,16 +72,18 @@ bool meshesIntersect(const HashedMesh<S>& a, const HashedMesh<S>& b, QueryOption
   return !intersectMeshes(a, b, options).pairs.empty();
 }
 
-/// O(n*m) reference: the same exact predicate on every pair (tests and regressions use it).
-/// Sorted by (a, b).
+/// O(n*m) reference: the same predicate on every pair, on the same coordinates as the queries
+/// (tests and regressions use it; with Predicate::Exact it is the ground truth). Sorted by (a, b).
 template <class S>
 std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
                                                     const Transform<S>& pose_a,
                                                     const TriangleMesh<S>& b,
-                                                    const Transform<S>& pose_b);
+                                                    const Transform<S>& pose_b,
+                                                    Predicate predicate = Predicate::Exact);
 
 /// O(n^2) reference for intersectSelf. Sorted by (a, b).
 template <class S>
-std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& mesh);
+std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& mesh,
+                                                  Predicate predicate = Predicate::Exact);
 
 }  // namespace kdet_fcl

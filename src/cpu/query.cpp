@@ -112,7 +112,7 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
   }
 
   auto exact = [&](std::uint32_t i, std::uint32_t j) {
-    return detail::trianglesIntersect(va[ta[i][0]], va[ta[i][1]], va[ta[i][2]], vb[tb[j][0]],
+    return detail::trianglesIntersect(options.predicate, va[ta[i][0]], va[ta[i][1]], va[ta[i][2]], vb[tb[j][0]],
                                       vb[tb[j][1]], vb[tb[j][2]]);
   };
 
@@ -212,7 +212,7 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
           [&](std::uint32_t j) {
             if (sharesVertex(ui, j)) return true;
             ++st.triangle_tests;
-            if (!detail::trianglesIntersect(v[t[i][0]], v[t[i][1]], v[t[i][2]], v[t[j][0]],
+            if (!detail::trianglesIntersect(options.predicate, v[t[i][0]], v[t[i][1]], v[t[i][2]], v[t[j][0]],
                                             v[t[j][1]], v[t[j][2]]))
               return true;
             out.push_back(ui < j ? TrianglePair{ui, j} : TrianglePair{j, ui});

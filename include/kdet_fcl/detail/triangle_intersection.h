@@ -20,6 +20,7 @@
 
 #include "kdet_fcl/detail/exact_predicates.h"
 #include "kdet_fcl/detail/host_device.h"
+#include "kdet_fcl/predicate.h"
 #include "kdet_fcl/vec3.h"
 
 namespace kdet_fcl {
@@ -53,18 +54,20 @@ KDET_HD_INLINE double projV(const Vec3<double>& p, int axis) {
 /// Exact orientation of a, b, c projected by dropping coordinate `axis`. Its value is (up to sign
 /// convention) the `axis` component of cross(b-a, c-a), so all three are zero iff a, b, c are
 /// collinear.
+template <class K>
 KDET_HD_INLINE int orient2dProj(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
                                 int axis) {
-  return orient2dSign(projU(a, axis), projV(a, axis), projU(b, axis), projV(b, axis),
+  return K::orient2d(projU(a, axis), projV(a, axis), projU(b, axis), projV(b, axis),
                       projU(c, axis), projV(c, axis));
 }
 
 /// Whether a, b, c are exactly collinear (all three coordinate projections have zero area). When
 /// not, `axis` receives a coordinate whose projection keeps them non-collinear.
+template <class K>
 KDET_HD_INLINE bool collinear(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
                               int& axis) {
   for (int k = 0; k < 3; ++k) {
-    if (orient2dProj(a, b, c, k) != 0) {
+    if (orient2dProj<K>(a, b, c, k) != 0) {
       axis = k;
       return false;
     }
@@ -88,6 +91,7 @@ KDET_HD_INLINE bool between(double a, double b, double t) {
 }
 
 /// Resolves the degeneracies of the closed triangle (a, b, c).
+template <class K>
 KDET_HD_INLINE Shape classify(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c) {
   Shape s;
   s.axis = 0;
@@ -95,7 +99,7 @@ KDET_HD_INLINE Shape classify(const Vec3<double>& a, const Vec3<double>& b, cons
   s.v[1] = b;
   s.v[2] = c;
   int axis = 0;
-  if (!collinear(a, b, c, axis)) {
+  if (!collinear<K>(a, b, c, axis)) {
     s.kind = Kind::Proper;
     s.axis = axis;
     return s;
@@ -123,10 +127,11 @@ KDET_HD_INLINE Shape classify(const Vec3<double>& a, const Vec3<double>& b, cons
 
 /// Whether p lies on the closed segment [s0, s1] (s0 != s1): exactly collinear and between the
 /// endpoints along a coordinate in which they differ.
+template <class K>
 KDET_HD_INLINE bool pointOnSegment(const Vec3<double>& p, const Vec3<double>& s0,
                                    const Vec3<double>& s1) {
   int unused = 0;
-  if (!collinear(s0, s1, p, unused)) return false;
+  if (!collinear<K>(s0, s1, p, unused)) return false;
   const int k = differingAxis(s0, s1);
   return between(s0[k], s1[k], p[k]);
 }
@@ -134,14 +139,15 @@ KDET_HD_INLINE bool pointOnSegment(const Vec3<double>& p, const Vec3<double>& s0
 /// Closed 2D segment intersection in the projection dropping `axis`; both segments must project
 /// to non-degenerate segments (true when they are non-degenerate and lie in a plane that projects
 /// one-to-one). Uses the 3D coordinates only through exact projections and comparisons.
+template <class K>
 KDET_FCL_HD_NOINLINE bool segmentsIntersectProj(const Vec3<double>& p0, const Vec3<double>& p1,
                                           const Vec3<double>& q0, const Vec3<double>& q1,
                                           int axis) {
-  const int d1 = orient2dProj(p0, p1, q0, axis);
-  const int d2 = orient2dProj(p0, p1, q1, axis);
+  const int d1 = orient2dProj<K>(p0, p1, q0, axis);
+  const int d2 = orient2dProj<K>(p0, p1, q1, axis);
   if (d1 * d2 > 0) return false;  // q strictly on one side of line p
-  const int d3 = orient2dProj(q0, q1, p0, axis);
-  const int d4 = orient2dProj(q0, q1, p1, axis);
+  const int d3 = orient2dProj<K>(q0, q1, p0, axis);
+  const int d4 = orient2dProj<K>(q0, q1, p1, axis);
   if (d3 * d4 > 0) return false;  // p strictly on one side of line q
   if (d1 == 0 && d2 == 0) {
     // All four points on one line (d1 = d2 = 0 with q0 != q1 forces d3 = d4 = 0): the segments
@@ -162,24 +168,27 @@ KDET_FCL_HD_NOINLINE bool segmentsIntersectProj(const Vec3<double>& p0, const Ve
 
 /// Whether p (in the plane of the proper triangle abc) lies in the closed triangle, decided in the
 /// one-to-one projection dropping `axis`: no two edge orientations of strictly opposite sign.
+template <class K>
 KDET_FCL_HD_NOINLINE bool pointInTriangleProj(const Vec3<double>& p, const Vec3<double>& a,
                                         const Vec3<double>& b, const Vec3<double>& c, int axis) {
-  const int s1 = orient2dProj(a, b, p, axis);
-  const int s2 = orient2dProj(b, c, p, axis);
-  const int s3 = orient2dProj(c, a, p, axis);
+  const int s1 = orient2dProj<K>(a, b, p, axis);
+  const int s2 = orient2dProj<K>(b, c, p, axis);
+  const int s3 = orient2dProj<K>(c, a, p, axis);
   const bool hasPos = s1 > 0 || s2 > 0 || s3 > 0;
   const bool hasNeg = s1 < 0 || s2 < 0 || s3 < 0;
   return !(hasPos && hasNeg);
 }
 
 /// Point vs proper triangle: on the plane and inside in the one-to-one projection.
+template <class K>
 KDET_HD_INLINE bool pointTriangle(const Vec3<double>& p, const Shape& t) {
-  if (orient3dSign(t.v[0], t.v[1], t.v[2], p) != 0) return false;
-  return pointInTriangleProj(p, t.v[0], t.v[1], t.v[2], t.axis);
+  if (K::orient3d(t.v[0], t.v[1], t.v[2], p) != 0) return false;
+  return pointInTriangleProj<K>(p, t.v[0], t.v[1], t.v[2], t.axis);
 }
 
 /// Closed segment [p, q] (p != q) vs proper triangle t, with op = orient3d(t, p) and
 /// oq = orient3d(t, q) already known (the caller often has them).
+template <class K>
 KDET_FCL_HD_NOINLINE bool segmentTriangleSigns(const Vec3<double>& p, const Vec3<double>& q,
                                          const Shape& t, int op, int oq) {
   if (op * oq > 0) return false;  // both endpoints strictly on one side of the plane
@@ -189,38 +198,40 @@ KDET_FCL_HD_NOINLINE bool segmentTriangleSigns(const Vec3<double>& p, const Vec3
   if (op == 0 && oq == 0) {
     // Coplanar: in the one-to-one projection, p inside or the segment meeting an edge. (If p is
     // outside, any point of the segment inside the triangle is reached by crossing its boundary.)
-    if (pointInTriangleProj(p, a, b, c, t.axis)) return true;
-    return segmentsIntersectProj(p, q, a, b, t.axis) || segmentsIntersectProj(p, q, b, c, t.axis) ||
-           segmentsIntersectProj(p, q, c, a, t.axis);
+    if (pointInTriangleProj<K>(p, a, b, c, t.axis)) return true;
+    return segmentsIntersectProj<K>(p, q, a, b, t.axis) || segmentsIntersectProj<K>(p, q, b, c, t.axis) ||
+           segmentsIntersectProj<K>(p, q, c, a, t.axis);
   }
   // The line pq is transversal to the plane and meets it at one point X inside the closed segment.
   // X is in the closed triangle iff the line passes the three edges on a consistent side: the
   // signed volumes with the three edges are never of strictly opposite signs.
-  const int s1 = orient3dSign(p, q, a, b);
-  const int s2 = orient3dSign(p, q, b, c);
-  const int s3 = orient3dSign(p, q, c, a);
+  const int s1 = K::orient3d(p, q, a, b);
+  const int s2 = K::orient3d(p, q, b, c);
+  const int s3 = K::orient3d(p, q, c, a);
   const bool hasPos = s1 > 0 || s2 > 0 || s3 > 0;
   const bool hasNeg = s1 < 0 || s2 < 0 || s3 < 0;
   return !(hasPos && hasNeg);
 }
 
 /// Closed segment [p, q] (p != q) vs proper triangle t.
+template <class K>
 KDET_HD_INLINE bool segmentTriangle(const Vec3<double>& p, const Vec3<double>& q, const Shape& t) {
-  const int op = orient3dSign(t.v[0], t.v[1], t.v[2], p);
-  const int oq = orient3dSign(t.v[0], t.v[1], t.v[2], q);
-  return segmentTriangleSigns(p, q, t, op, oq);
+  const int op = K::orient3d(t.v[0], t.v[1], t.v[2], p);
+  const int oq = K::orient3d(t.v[0], t.v[1], t.v[2], q);
+  return segmentTriangleSigns<K>(p, q, t, op, oq);
 }
 
 /// Closed segment vs closed segment, both non-degenerate.
+template <class K>
 KDET_FCL_HD_NOINLINE bool segmentSegment(const Vec3<double>& p0, const Vec3<double>& p1,
                                    const Vec3<double>& q0, const Vec3<double>& q1) {
   // Not coplanar: the segments cannot meet.
-  if (orient3dSign(p0, p1, q0, q1) != 0) return false;
+  if (K::orient3d(p0, p1, q0, q1) != 0) return false;
   // Coplanar: find a projection keeping (p0, p1, q0) or (p0, p1, q1) non-collinear; it maps the
   // common plane one-to-one, so the 2D test is exact for the 3D question.
   for (int k = 0; k < 3; ++k) {
-    if (orient2dProj(p0, p1, q0, k) != 0 || orient2dProj(p0, p1, q1, k) != 0) {
-      return segmentsIntersectProj(p0, p1, q0, q1, k);
+    if (orient2dProj<K>(p0, p1, q0, k) != 0 || orient2dProj<K>(p0, p1, q1, k) != 0) {
+      return segmentsIntersectProj<K>(p0, p1, q0, q1, k);
     }
   }
   // q0 and q1 both lie on the line p0p1: compare intervals along a coordinate varying on it.
@@ -231,12 +242,13 @@ KDET_FCL_HD_NOINLINE bool segmentSegment(const Vec3<double>& p0, const Vec3<doub
 }
 
 /// Proper triangle vs proper triangle.
+template <class K>
 KDET_HD_INLINE bool properProper(const Shape& P, const Shape& Q) {
   // Signs of P's vertices against Q's plane, and of Q's vertices against P's plane.
   int sp[3], sq[3];
-  for (int i = 0; i < 3; ++i) sp[i] = orient3dSign(Q.v[0], Q.v[1], Q.v[2], P.v[i]);
+  for (int i = 0; i < 3; ++i) sp[i] = K::orient3d(Q.v[0], Q.v[1], Q.v[2], P.v[i]);
   if (sp[0] == sp[1] && sp[1] == sp[2] && sp[0] != 0) return false;  // P strictly on one side
-  for (int i = 0; i < 3; ++i) sq[i] = orient3dSign(P.v[0], P.v[1], P.v[2], Q.v[i]);
+  for (int i = 0; i < 3; ++i) sq[i] = K::orient3d(P.v[0], P.v[1], P.v[2], Q.v[i]);
   if (sq[0] == sq[1] && sq[1] == sq[2] && sq[0] != 0) return false;  // Q strictly on one side
   // The triangles meet iff some closed edge of one meets the other closed triangle. Non-coplanar:
   // both meet the line L of the two planes in closed intervals whose endpoints lie on their edges;
@@ -244,17 +256,18 @@ KDET_HD_INLINE bool properProper(const Shape& P, const Shape& Q) {
   // that meet either have crossing edges or one contains a vertex (on an edge) of the other.
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3;
-    if (segmentTriangleSigns(P.v[i], P.v[j], Q, sp[i], sp[j])) return true;
+    if (segmentTriangleSigns<K>(P.v[i], P.v[j], Q, sp[i], sp[j])) return true;
   }
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3;
-    if (segmentTriangleSigns(Q.v[i], Q.v[j], P, sq[i], sq[j])) return true;
+    if (segmentTriangleSigns<K>(Q.v[i], Q.v[j], P, sq[i], sq[j])) return true;
   }
   return false;
 }
 
 /// Any classified shape vs any other; A.kind <= B.kind in the order Point < Segment < Proper is
 /// not required (the function orders them itself).
+template <class K>
 KDET_HD_INLINE bool shapesIntersect(const Shape& A0, const Shape& B0) {
   // Order so that A is the "smaller" kind; each pair is then handled once.
   const bool swap = static_cast<int>(A0.kind) > static_cast<int>(B0.kind);
@@ -263,18 +276,71 @@ KDET_HD_INLINE bool shapesIntersect(const Shape& A0, const Shape& B0) {
   switch (A.kind) {
     case Kind::Point:
       if (B.kind == Kind::Point) return A.v[0] == B.v[0];
-      if (B.kind == Kind::Segment) return pointOnSegment(A.v[0], B.v[0], B.v[1]);
-      return pointTriangle(A.v[0], B);
+      if (B.kind == Kind::Segment) return pointOnSegment<K>(A.v[0], B.v[0], B.v[1]);
+      return pointTriangle<K>(A.v[0], B);
     case Kind::Segment:
-      if (B.kind == Kind::Segment) return segmentSegment(A.v[0], A.v[1], B.v[0], B.v[1]);
-      return segmentTriangle(A.v[0], A.v[1], B);
+      if (B.kind == Kind::Segment) return segmentSegment<K>(A.v[0], A.v[1], B.v[0], B.v[1]);
+      return segmentTriangle<K>(A.v[0], A.v[1], B);
     case Kind::Proper:
     default:
-      return properProper(A, B);
+      return properProper<K>(A, B);
   }
 }
 
 }  // namespace tri_isect
+
+/// Orientation signs decided exactly (the default: filtered, with an exact fallback).
+struct ExactKernel {
+  static KDET_HD_INLINE int orient3d(const Vec3<double>& a, const Vec3<double>& b,
+                                     const Vec3<double>& c, const Vec3<double>& d) {
+    return orient3dSign(a, b, c, d);
+  }
+  static KDET_HD_INLINE int orient2d(double ax, double ay, double bx, double by, double cx,
+                                     double cy) {
+    return orient2dSign(ax, ay, bx, by, cx, cy);
+  }
+};
+
+/// Orientation signs in plain T arithmetic, with no filter and no fallback: the coordinates are
+/// rounded to T and the determinants evaluated naively. Fast, and wrong near degeneracies: this is
+/// the "float" and "double" end of the speed/accuracy trade (docs/numerics.md measures it).
+template <class T>
+struct PlainKernel {
+  static KDET_HD_INLINE int sign(T v) { return v > T(0) ? 1 : (v < T(0) ? -1 : 0); }
+  static KDET_HD_INLINE int orient3d(const Vec3<double>& a, const Vec3<double>& b,
+                                     const Vec3<double>& c, const Vec3<double>& d) {
+    const T ax = T(a.x), ay = T(a.y), az = T(a.z);
+    const T bx = T(b.x) - ax, by = T(b.y) - ay, bz = T(b.z) - az;
+    const T cx = T(c.x) - ax, cy = T(c.y) - ay, cz = T(c.z) - az;
+    const T dx = T(d.x) - ax, dy = T(d.y) - ay, dz = T(d.z) - az;
+    return sign((by * cz - bz * cy) * dx + (bz * cx - bx * cz) * dy + (bx * cy - by * cx) * dz);
+  }
+  static KDET_HD_INLINE int orient2d(double ax, double ay, double bx, double by, double cx,
+                                     double cy) {
+    return sign((T(bx) - T(ax)) * (T(cy) - T(ay)) - (T(by) - T(ay)) * (T(cx) - T(ax)));
+  }
+};
+
+/// trianglesIntersect() with the orientation signs of kernel K (ExactKernel, PlainKernel<T>).
+template <class K, class S>
+KDET_HD_INLINE bool trianglesIntersectWith(const Vec3<S>& p0, const Vec3<S>& p1,
+                                           const Vec3<S>& p2, const Vec3<S>& q0,
+                                           const Vec3<S>& q1, const Vec3<S>& q2) {
+  const Vec3<double> P0 = toDouble(p0), P1 = toDouble(p1), P2 = toDouble(p2);
+  const Vec3<double> Q0 = toDouble(q0), Q1 = toDouble(q1), Q2 = toDouble(q2);
+  // Fast rejection before any classification (most candidate pairs end here): all of one
+  // triangle strictly on one side of the other's plane. A degenerate triangle has no plane: its
+  // orientations are all zero, so it never rejects here and is handled below.
+  const int a0 = K::orient3d(Q0, Q1, Q2, P0);
+  if (a0 != 0 && K::orient3d(Q0, Q1, Q2, P1) == a0 && K::orient3d(Q0, Q1, Q2, P2) == a0)
+    return false;
+  const int b0 = K::orient3d(P0, P1, P2, Q0);
+  if (b0 != 0 && K::orient3d(P0, P1, P2, Q1) == b0 && K::orient3d(P0, P1, P2, Q2) == b0)
+    return false;
+  const tri_isect::Shape P = tri_isect::classify<K>(P0, P1, P2);
+  const tri_isect::Shape Q = tri_isect::classify<K>(Q0, Q1, Q2);
+  return tri_isect::shapesIntersect<K>(P, Q);
+}
 
 /// Whether the closed triangles (p0, p1, p2) and (q0, q1, q2) share at least one point, decided
 /// exactly on the given coordinates (S = float or double; converted to double without rounding).
@@ -283,20 +349,22 @@ KDET_HD_INLINE bool shapesIntersect(const Shape& A0, const Shape& B0) {
 template <class S>
 KDET_HD_INLINE bool trianglesIntersect(const Vec3<S>& p0, const Vec3<S>& p1, const Vec3<S>& p2,
                                        const Vec3<S>& q0, const Vec3<S>& q1, const Vec3<S>& q2) {
-  const Vec3<double> P0 = toDouble(p0), P1 = toDouble(p1), P2 = toDouble(p2);
-  const Vec3<double> Q0 = toDouble(q0), Q1 = toDouble(q1), Q2 = toDouble(q2);
-  // Fast exact rejection before any classification (most candidate pairs end here): all of one
-  // triangle strictly on one side of the other's plane. A degenerate triangle has no plane: its
-  // orientations are all zero, so it never rejects here and is handled below.
-  const int a0 = orient3dSign(Q0, Q1, Q2, P0);
-  if (a0 != 0 && orient3dSign(Q0, Q1, Q2, P1) == a0 && orient3dSign(Q0, Q1, Q2, P2) == a0)
-    return false;
-  const int b0 = orient3dSign(P0, P1, P2, Q0);
-  if (b0 != 0 && orient3dSign(P0, P1, P2, Q1) == b0 && orient3dSign(P0, P1, P2, Q2) == b0)
-    return false;
-  const tri_isect::Shape P = tri_isect::classify(P0, P1, P2);
-  const tri_isect::Shape Q = tri_isect::classify(Q0, Q1, Q2);
-  return tri_isect::shapesIntersect(P, Q);
+  return trianglesIntersectWith<ExactKernel>(p0, p1, p2, q0, q1, q2);
+}
+
+/// trianglesIntersect() under the chosen Predicate.
+template <class S>
+KDET_HD_INLINE bool trianglesIntersect(Predicate pred, const Vec3<S>& p0, const Vec3<S>& p1,
+                                       const Vec3<S>& p2, const Vec3<S>& q0, const Vec3<S>& q1,
+                                       const Vec3<S>& q2) {
+  switch (pred) {
+    case Predicate::Double:
+      return trianglesIntersectWith<PlainKernel<double>>(p0, p1, p2, q0, q1, q2);
+    case Predicate::Float:
+      return trianglesIntersectWith<PlainKernel<float>>(p0, p1, p2, q0, q1, q2);
+    default:
+      return trianglesIntersectWith<ExactKernel>(p0, p1, p2, q0, q1, q2);
+  }
 }
 
 }  // namespace detail
