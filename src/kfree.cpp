@@ -79,7 +79,7 @@ KFreeStats analyzeKFree(const TriangleMesh<S>& mesh, const KFreeOptions& options
       const double r = h.diameter[i] / 4;
       const detail::Aabb<double> q = detail::inflate(h.boxes[i], r * (1 + 1e-9) + 1e-300);
       cpu::scanCandidates(
-          h, q, h.diameter[i], [&](std::uint32_t j, double dj) { return j != ui && dj >= h.diameter[i]; },
+          h, q, h.diameter[i], [&](std::uint32_t j, double dj) { return dj >= h.diameter[i] ? (j != ui ? 1 : 0) : -1; },
           [&](std::uint32_t j) {
             if (countsFor(mesh, h.diameter, ui, j)) {
               ++counts[i];
