@@ -12,6 +12,12 @@
 #   BUILD_DIR   build directory (default: build-gpu)
 #   CMAKE_ARGS  extra configure arguments (word-split)
 #   JOBS        parallel build/test jobs (default: nproc)
+#   KDET_FCL_DATA_DIR  test/benchmark data (default: .gpu-data when it exists: a copy of the
+#               needed ../shared/data files, since an offline GPU machine has no ../shared)
+#   GPU_BENCH   1: also run the GPU benchmark (benchmarks/gpu_bench; log and CSV in OUT)
+#   TARGETS     build only these targets (space-separated; default: everything)
+#   CTEST_ALL   0: skip the run of the whole suite after the CUDA label (default 1)
+#   SANITIZER   1: also run compute-sanitizer memcheck and racecheck on a small CUDA test scene
 # Exit status: 0 when the build and both test runs pass, else non-zero.
 set -uo pipefail
 
@@ -67,6 +73,9 @@ while IFS= read -r -d '' link; do
 done < <(find "$LIBDIR" -maxdepth 1 -xtype l -print0)
 
 export LD_LIBRARY_PATH="$LIBDIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+if [[ -z "${KDET_FCL_DATA_DIR:-}" && -d "$ROOT/.gpu-data" ]]; then
+  export KDET_FCL_DATA_DIR="$ROOT/.gpu-data"
+fi
 
 # ---- configure and build -------------------------------------------------------------------
 cmake_args=(
@@ -90,8 +99,8 @@ log "configuring and building $BUILD_DIR (log: $OUT/build.log)"
   echo "LD_LIBRARY_PATH=$LD_LIBRARY_PATH"
   echo "+ cmake ${cmake_args[*]} ${extra[*]:-}"
   cmake "${cmake_args[@]}" ${extra[@]+"${extra[@]}"} &&
-    echo "+ cmake --build $BUILD_DIR --parallel $JOBS" &&
-    cmake --build "$BUILD_DIR" --parallel "$JOBS"
+    echo "+ cmake --build $BUILD_DIR --parallel $JOBS ${TARGETS:+--target $TARGETS}" &&
+    cmake --build "$BUILD_DIR" --parallel "$JOBS" ${TARGETS:+--target $TARGETS}
 } >"$OUT/build.log" 2>&1
 build_rc=$?
 if ((build_rc != 0)); then
@@ -118,17 +127,40 @@ if command -v nvidia-smi >/dev/null 2>&1 && nvidia-smi -L 2>/dev/null | grep -q 
 fi
 log "ctest -L cuda: exit $cuda_rc"
 
-log "ctest (all) (log: $OUT/ctest.log)"
-{
-  echo
-  echo "==== ctest (all)"
-  ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS"
-} >>"$OUT/ctest.log" 2>&1
-all_rc=$?
-log "ctest (all): exit $all_rc"
+all_rc=0
+if [[ "${CTEST_ALL:-1}" != 0 ]]; then
+  log "ctest (all) (log: $OUT/ctest.log)"
+  {
+    echo
+    echo "==== ctest (all)"
+    ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS"
+  } >>"$OUT/ctest.log" 2>&1
+  all_rc=$?
+  log "ctest (all): exit $all_rc"
+fi
 grep -E "tests passed|tests failed|The following tests" "$OUT/ctest.log" || true
 
-if ((cuda_rc != 0 || all_rc != 0)); then
+# ---- optional: compute-sanitizer on a small scene, and the GPU benchmark --------------------
+san_rc=0
+if [[ "${SANITIZER:-0}" == 1 ]]; then
+  SAN="$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)"
+  filter='CudaQueryTyped/*.ClothOverSphereAndSelf:CudaQuery.OutputOverflowGrowsAndReruns:CudaQuery.HugeSizeRatioUsesFull128BitKeys'
+  for tool in memcheck racecheck; do
+    log "compute-sanitizer --tool $tool (log: $OUT/sanitizer-$tool.log)"
+    "$SAN" --tool "$tool" --error-exitcode 3 "$BUILD_DIR/tests/test_cuda_query" \
+      --gtest_filter="$filter" >"$OUT/sanitizer-$tool.log" 2>&1 || san_rc=1
+    tail -n 3 "$OUT/sanitizer-$tool.log"
+  done
+fi
+bench_rc=0
+if [[ "${GPU_BENCH:-0}" == 1 ]]; then
+  log "gpu_bench (log: $OUT/gpu_bench.log)"
+  "$BUILD_DIR/benchmarks/gpu_bench" ${GPU_BENCH_ARGS:-} --csv "$OUT/gpu_bench.csv" \
+    >"$OUT/gpu_bench.log" 2>&1 || bench_rc=1
+  cat "$OUT/gpu_bench.log"
+fi
+
+if ((cuda_rc != 0 || all_rc != 0 || san_rc != 0 || bench_rc != 0)); then
   log "FAILED (see $OUT/ctest.log)"
   exit 1
 fi

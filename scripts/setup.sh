@@ -17,9 +17,10 @@ BUILD_DIR="${BUILD_DIR:-build}"
 CMAKE_ARGS="${CMAKE_ARGS:-}"
 JOBS="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
 
-# libgmp-dev: the exact-arithmetic referee in the tests; gnuplot-nox: plots in the benchmarks.
+# libgmp-dev: the exact-arithmetic referee in the tests; gnuplot-nox: plots in the benchmarks;
+# clang + libclang-rt-14-dev: libFuzzer for scripts/fuzz.sh (CI runs it after the tests).
 PACKAGES=(build-essential cmake libgtest-dev libbenchmark-dev libeigen3-dev libccd-dev
-          libfcl-dev libtinyobjloader-dev libgmp-dev gnuplot-nox)
+          libfcl-dev libtinyobjloader-dev libgmp-dev gnuplot-nox clang libclang-rt-14-dev)
 
 log() { printf '[setup] %s\n' "$*"; }
 

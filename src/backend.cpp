@@ -17,6 +17,9 @@
 namespace kdet_fcl {
 namespace {
 
+/// Backend::Auto sends queries of at least this many triangles (both meshes together) to the GPU.
+constexpr std::size_t kAutoCudaMinTriangles = 20000;
+
 #if KDET_FCL_HAVE_CUDA
 /// The device count and, when it is 0, the reason. Queried once per process: initialising the
 /// CUDA runtime is not free, and the answer does not change while the process runs.
@@ -75,29 +78,24 @@ std::string cudaDeviceDescription(int device) {
 #endif
 }
 
+std::size_t autoCudaMinTriangles() { return kAutoCudaMinTriangles; }
+
 Backend resolveBackend(Backend requested, std::size_t work_triangles) {
-  // work_triangles will decide Auto once the GPU backend exists (small queries stay on the CPU,
-  // where the launch and transfer overheads do not pay).
-  (void)work_triangles;
   switch (requested) {
     case Backend::Cpu:
       return Backend::Cpu;
     case Backend::Auto:
-      // There is no GPU query backend yet, so Auto always means the CPU. When the CUDA backend
-      // lands: return Backend::Cuda when cudaDeviceCount() > 0 and work_triangles is above the
-      // measured break-even size.
-      return Backend::Cpu;
+      // The GPU pays once the query is large enough to hide its launches and read-backs
+      // (benchmarks/RESULTS-gpu.md has the measured break-even).
+      return (cudaDeviceCount() > 0 && work_triangles >= kAutoCudaMinTriangles) ? Backend::Cuda
+                                                                                 : Backend::Cpu;
     case Backend::Cuda: {
 #if KDET_FCL_HAVE_CUDA
-      const int count = cudaDeviceCount();
-      if (count == 0) {
+      if (cudaDeviceCount() == 0) {
         throw BackendUnavailableError("Backend::Cuda requested but there is no CUDA device: " +
                                       probe().error);
       }
-      throw BackendUnavailableError(
-          "Backend::Cuda requested but the CUDA backend is not implemented in this version "
-          "(device 0: " +
-          cudaDeviceDescription(0) + "); use Backend::Cpu or Backend::Auto");
+      return Backend::Cuda;
 #else
       throw BackendUnavailableError(
           "Backend::Cuda requested but kdet_fcl was built without CUDA (no nvcc at build time; "

@@ -18,6 +18,8 @@ std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
                                                     Predicate predicate) {
   a.validate(false, "bruteForceIntersectMeshes: first mesh");
   b.validate(false, "bruteForceIntersectMeshes: second mesh");
+  validatePose(pose_a, "bruteForceIntersectMeshes: first pose");
+  validatePose(pose_b, "bruteForceIntersectMeshes: second pose");
   const detail::RelativePose rp = detail::relativePose(pose_a, pose_b);
   std::vector<Vec3<S>> va(a.vertices);
   if (!rp.identity)

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <type_traits>
+#include <string>
 #include <utility>
 
 #include "cpu/hierarchical_hash.h"
@@ -15,7 +16,8 @@ HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int th
   mesh_.validate(false, "HashedMesh");
   setPose(pose);
   hash_ = std::make_unique<detail::HierarchicalHash<S>>();
-  rebuild();
+  spare_ = std::make_unique<detail::HierarchicalHash<S>>();
+  rehash(mesh_.vertices, mesh_.triangles);
 }
 
 template <class S>
@@ -31,20 +33,20 @@ double HashedMesh<S>::orthonormalTolerance() {
 }
 
 template <class S>
-void HashedMesh<S>::setPose(const Transform<S>& pose) {
+void validatePose(const Transform<S>& pose, const std::string& what) {
   for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(pose.t[i])) throw InvalidInputError("setPose: non-finite translation");
+    if (!std::isfinite(pose.t[i])) throw InvalidInputError(what + ": non-finite translation");
     for (int j = 0; j < 3; ++j)
-      if (!std::isfinite(pose.R[i][j])) throw InvalidInputError("setPose: non-finite rotation");
+      if (!std::isfinite(pose.R[i][j])) throw InvalidInputError(what + ": non-finite rotation");
   }
-  const double tol = orthonormalTolerance();
+  const double tol = HashedMesh<S>::orthonormalTolerance();
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
       double s = 0;
       for (int k = 0; k < 3; ++k) s += double(pose.R[k][i]) * double(pose.R[k][j]);
       if (std::fabs(s - (i == j ? 1.0 : 0.0)) > tol)
         throw InvalidInputError(
-            "setPose: the rotation is not orthonormal (|R^T R - I| exceeds " +
+            what + ": the rotation is not orthonormal (|R^T R - I| exceeds " +
             std::to_string(tol) + "); scaling and shearing are not supported");
     }
   const auto& R = pose.R;
@@ -52,8 +54,13 @@ void HashedMesh<S>::setPose(const Transform<S>& pose) {
                      double(R[0][1]) * (double(R[1][0]) * R[2][2] - double(R[1][2]) * R[2][0]) +
                      double(R[0][2]) * (double(R[1][0]) * R[2][1] - double(R[1][1]) * R[2][0]);
   if (std::fabs(det - 1.0) > 4 * tol)
-    throw InvalidInputError("setPose: the rotation has determinant " + std::to_string(det) +
+    throw InvalidInputError(what + ": the rotation has determinant " + std::to_string(det) +
                             " (a reflection, not a rotation)");
+}
+
+template <class S>
+void HashedMesh<S>::setPose(const Transform<S>& pose) {
+  validatePose(pose, "setPose");
   pose_ = pose;
 }
 
@@ -66,29 +73,35 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
   TriangleMesh<S> probe;  // validate the new coordinates before touching the mesh
   probe.vertices = vertices;
   probe.validate(false, "updateVertices");
+  rehash(probe.vertices, mesh_.triangles);
   mesh_.vertices = std::move(probe.vertices);
-  rebuild();
 }
 
 template <class S>
 void HashedMesh<S>::setMesh(TriangleMesh<S> mesh) {
   mesh.validate(false, "setMesh");
+  rehash(mesh.vertices, mesh.triangles);
   mesh_ = std::move(mesh);
-  rebuild();
 }
 
 template <class S>
-void HashedMesh<S>::rebuild() {
-  hash_->build(mesh_, threads_);
+void HashedMesh<S>::rehash(const std::vector<Vec3<S>>& vertices,
+                           const std::vector<Triangle>& triangles) {
+  spare_->build(vertices, triangles, threads_);
+  std::swap(hash_, spare_);
   ++version_;
 }
 
 template <class S>
 HierarchyStats HashedMesh<S>::stats() const {
-  return hash_->stats();
+  HierarchyStats st = hash_->stats();
+  st.memory_bytes += spare_->memoryBytes();  // the buffers kept for the next rebuild
+  return st;
 }
 
 template class HashedMesh<float>;
 template class HashedMesh<double>;
+template void validatePose(const Transform<float>&, const std::string&);
+template void validatePose(const Transform<double>&, const std::string&);
 
 }  // namespace kdet_fcl

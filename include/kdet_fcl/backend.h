@@ -10,7 +10,8 @@ namespace kdet_fcl {
 
 /// Where a query runs. Cpu is always available. Cuda needs a CUDA build and a device (otherwise
 /// BackendUnavailableError). Auto picks the GPU when one is present and the work is large enough
-/// to pay, else the CPU.
+/// to pay, else the CPU. Both backends return the same pair set; the CPU's order is its own
+/// deterministic order, the GPU's is sorted by (a, b).
 enum class Backend { Cpu, Cuda, Auto };
 
 /// True when this library was compiled with the CUDA backend (nvcc found at build time).
@@ -28,10 +29,15 @@ std::string cudaDeviceDescription(int device = 0);
 /// The backend that actually runs a query of about `work_triangles` triangles (both meshes
 /// together) when `requested` is asked for:
 ///  - Backend::Cpu  -> Backend::Cpu.
-///  - Backend::Auto -> Backend::Cpu in this version (there is no GPU query backend yet).
-///  - Backend::Cuda -> throws BackendUnavailableError, saying why: the library was built
-///    without CUDA, there is no usable device (with the CUDA error text), or the CUDA query
-///    backend is not implemented in this version.
+///  - Backend::Auto -> Backend::Cuda when a CUDA device is usable and work_triangles >=
+///    autoCudaMinTriangles(), else Backend::Cpu.
+///  - Backend::Cuda -> Backend::Cuda when a device is usable; otherwise throws
+///    BackendUnavailableError saying why (built without CUDA, or no usable device, with the CUDA
+///    error text). CUDA failures during a query throw CudaError with the CUDA error text.
 Backend resolveBackend(Backend requested, std::size_t work_triangles = 0);
+
+/// The smallest query (triangles of both meshes together) that Backend::Auto sends to the GPU:
+/// the measured break-even against the CPU backend (benchmarks/RESULTS-gpu.md).
+std::size_t autoCudaMinTriangles();
 
 }  // namespace kdet_fcl

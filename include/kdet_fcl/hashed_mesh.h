@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "kdet_fcl/triangle_mesh.h"
@@ -21,7 +22,7 @@ struct HierarchyStats {
   std::size_t cells = 0;         ///< occupied cells over all levels
   std::size_t entries = 0;       ///< (cell, triangle) entries
   std::size_t max_cell_load = 0; ///< most triangles in one cell
-  std::size_t memory_bytes = 0;  ///< bytes held by the hash (excluding the mesh itself)
+  std::size_t memory_bytes = 0;  ///< bytes held by the hash and its rebuild buffers (not the mesh)
 };
 
 namespace detail {
@@ -75,14 +76,22 @@ class HashedMesh {
   const detail::HierarchicalHash<S>& hash() const { return *hash_; }
 
  private:
-  void rebuild();
+  /// Builds the hash of (vertices, triangles) into the spare structure and swaps it in: if the
+  /// build throws (out of memory), the current mesh and hash are untouched.
+  void rehash(const std::vector<Vec3<S>>& vertices, const std::vector<Triangle>& triangles);
 
   TriangleMesh<S> mesh_;
   Transform<S> pose_;
   std::unique_ptr<detail::HierarchicalHash<S>> hash_;
+  std::unique_ptr<detail::HierarchicalHash<S>> spare_;  // reused buffers for the next rebuild
   std::uint64_t version_ = 0;
   int threads_ = 0;
 };
+
+/// Throws InvalidInputError (message prefixed by `what`) unless `pose` is finite and its rotation
+/// is orthonormal with determinant +1 within HashedMesh<S>::orthonormalTolerance().
+template <class S>
+void validatePose(const Transform<S>& pose, const std::string& what);
 
 extern template class HashedMesh<float>;
 extern template class HashedMesh<double>;

@@ -38,6 +38,7 @@ struct TrianglePair {
 
 /// Counters of one query (for profiling and the benchmarks).
 struct QueryStats {
+  std::uint64_t lookups = 0;          ///< hash lookups (occupied cells or not)
   std::uint64_t cells_visited = 0;    ///< hash lookups that found an occupied cell
   std::uint64_t box_tests = 0;        ///< candidate pairs whose boxes were compared
   std::uint64_t triangle_tests = 0;   ///< exact triangle-triangle tests run

@@ -11,8 +11,9 @@ namespace kdet_fcl {
 namespace detail {
 
 template <class S>
-void HierarchicalHash<S>::build(const TriangleMesh<S>& mesh, int threads) {
-  const std::size_t n = mesh.triangles.size();
+void HierarchicalHash<S>::build(const std::vector<Vec3<S>>& vertices,
+                                const std::vector<Triangle>& triangles, int threads) {
+  const std::size_t n = triangles.size();
   boxes.assign(n, Aabb<double>{});
   diameter.assign(n, 0.0);
   level.assign(n, 0);
@@ -27,8 +28,8 @@ void HierarchicalHash<S>::build(const TriangleMesh<S>& mesh, int threads) {
   grid = GridParams{};
   if (n == 0) return;
 
-  const Vec3<S>* v = mesh.vertices.data();
-  const Triangle* t = mesh.triangles.data();
+  const Vec3<S>* v = vertices.data();
+  const Triangle* t = triangles.data();
   cpu::parallelFor(n, 8192, threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
       const Vec3<S>&p = v[t[i][0]], &q = v[t[i][1]], &r = v[t[i][2]];
@@ -144,10 +145,14 @@ HierarchyStats HierarchicalHash<S>::stats() const {
   st.cells = cells_;
   st.entries = entries.size();
   for (const Slot& s : slots_) st.max_cell_load = std::max<std::size_t>(st.max_cell_load, s.count);
-  st.memory_bytes = boxes.size() * sizeof(Aabb<double>) + diameter.size() * sizeof(double) +
-                    level.size() + entries.size() * sizeof(Entry) +
-                    slots_.size() * sizeof(Slot);
+  st.memory_bytes = memoryBytes();
   return st;
+}
+
+template <class S>
+std::size_t HierarchicalHash<S>::memoryBytes() const {
+  return boxes.capacity() * sizeof(Aabb<double>) + diameter.capacity() * sizeof(double) +
+         level.capacity() + entries.capacity() * sizeof(Entry) + slots_.capacity() * sizeof(Slot);
 }
 
 template class HierarchicalHash<float>;

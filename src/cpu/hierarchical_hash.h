@@ -35,8 +35,12 @@ class HierarchicalHash {
     std::uint32_t count;  // 0: empty slot (an occupied cell always holds a triangle)
   };
 
-  /// Builds from the mesh's local coordinates. `mesh` must be valid.
-  void build(const TriangleMesh<S>& mesh, int threads);
+  /// Builds from a mesh's local coordinates (validated by the caller). On an exception (only
+  /// std::bad_alloc or a too-large mesh) the object is left empty; HashedMesh builds into a spare
+  /// one so that its own state survives.
+  void build(const std::vector<Vec3<S>>& vertices, const std::vector<Triangle>& triangles,
+             int threads);
+  void build(const TriangleMesh<S>& mesh, int threads) { build(mesh.vertices, mesh.triangles, threads); }
 
   /// The slot of a cell, or nullptr when the cell is empty.
   const Slot* find(const CellKey& key) const {
@@ -54,6 +58,8 @@ class HierarchicalHash {
   bool empty() const { return diameter.empty(); }
   bool levelOccupied(int l) const { return (level_mask >> l) & 1u; }
   HierarchyStats stats() const;
+  /// Bytes allocated by this structure.
+  std::size_t memoryBytes() const;
 
   // Per triangle (local frame).
   std::vector<Aabb<double>> boxes;

@@ -56,6 +56,7 @@ QueryResult runChunks(std::size_t num_chunks, int threads, std::size_t max_pairs
   QueryResult res;
   for (std::size_t c = 0; c < num_chunks && outs[c].done; ++c) {
     const Out& o = outs[c];
+    res.stats.lookups += o.stats.lookups;
     res.stats.cells_visited += o.stats.cells_visited;
     res.stats.box_tests += o.stats.box_tests;
     res.stats.triangle_tests += o.stats.triangle_tests;
@@ -83,36 +84,66 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
 
   const detail::RelativePose rp = detail::relativePose(A.pose(), B.pose());
   const int threads = (na + nb >= kParallelMinimum) ? options.threads : 1;
-
-  // A's vertices in B's frame: the coordinates every exact test of this query uses.
-  std::vector<Vec3<S>> mapped;
   const Vec3<S>* va = ma.vertices.data();
-  if (!rp.identity) {
-    mapped.resize(ma.vertices.size());
-    parallelFor(mapped.size(), 16384, threads, [&](std::size_t b, std::size_t e) {
-      for (std::size_t v = b; v < e; ++v) mapped[v] = detail::mapPoint(rp.a_to_b, ma.vertices[v]);
-    });
-    va = mapped.data();
-  }
   const Vec3<S>* vb = mb.vertices.data();
   const Triangle* ta = ma.triangles.data();
   const Triangle* tb = mb.triangles.data();
 
-  // B's boxes mapped back into A's frame differ from the exact geometry by rounding (the mapping
-  // of A into B, the inverse mapping, R's distance from orthonormal); grow them by a bound on
-  // that so no touching pair is missed.
-  double eps = 0;
-  if (!rp.identity) {
-    double mag = std::fabs(rp.a_to_b.t.x) + std::fabs(rp.a_to_b.t.y) + std::fabs(rp.a_to_b.t.z);
-    for (int k = 0; k < 3; ++k)
-      mag += std::max(std::fabs(ha.bounds.lo[k]), std::fabs(ha.bounds.hi[k])) +
-             std::max(std::fabs(hb.bounds.lo[k]), std::fabs(hb.bounds.hi[k]));
-    eps = (16 * rp.orthonormal_defect + 64 * double(std::numeric_limits<S>::epsilon())) * mag +
-          std::numeric_limits<double>::min();
-  }
+  // Every exact test of this query uses A's vertices mapped into B's frame (detail::mapPoint:
+  // mapped in double, rounded once to S) and B's own. Vertices are mapped when a triangle needs
+  // them, so triangles far from the other mesh cost nothing beyond a box test.
+  auto vertexInB = [&](std::uint32_t v) {
+    return rp.identity ? va[v] : detail::mapPoint(rp.a_to_b, va[v]);
+  };
+  struct Tri {
+    Vec3<S> p[3];
+  };
+  auto triangleInB = [&](std::uint32_t i) {
+    return Tri{{vertexInB(ta[i][0]), vertexInB(ta[i][1]), vertexInB(ta[i][2])}};
+  };
 
-  auto exact = [&](std::uint32_t i, std::uint32_t j) {
-    return detail::trianglesIntersect(options.predicate, va[ta[i][0]], va[ta[i][1]], va[ta[i][2]], vb[tb[j][0]],
+  // Lookups of B's triangles in A's hierarchy use B's coordinates mapped back into A's frame,
+  // which differ from the exact geometry by rounding: of A's vertices when mapped into B (at most
+  // ~u_S times their magnitude, i.e. near a touching point x of B's triangle j: |x| + d_i), of the
+  // back-mapping (u_double times |b| + |t|), and R's distance from orthonormal (delta times the
+  // same). A candidate on A's level L has d_i <= cell_L, so growing the lookup box by
+  //   grow(L) = K (u_S + u_double + delta) (|b_j|_max + |t| + cell_L)
+  // keeps every touching pair a candidate, and stays local to the triangle looked up.
+  const double unit = double(std::numeric_limits<S>::epsilon()) +
+                      std::numeric_limits<double>::epsilon() + rp.orthonormal_defect;
+  const double grow_rel = rp.identity ? 0.0 : 64 * unit;
+  const double tmag =
+      std::fabs(rp.a_to_b.t.x) + std::fabs(rp.a_to_b.t.y) + std::fabs(rp.a_to_b.t.z);
+  auto maxAbs = [](const Aabb<double>& b) {
+    double m = 0;
+    for (int k = 0; k < 3; ++k) m = std::max({m, std::fabs(b.lo[k]), std::fabs(b.hi[k])});
+    return m;
+  };
+  // Coarse filters: the other mesh's bounds in each frame, grown by a scene-wide bound on the
+  // same rounding. A triangle outside them meets nothing.
+  auto mappedBounds = [&](const Aabb<double>& b, const Transform<double>& T, double grow) {
+    Aabb<double> r{{1, 1, 1}, {0, 0, 0}};
+    for (int c = 0; c < 8; ++c) {
+      const Vec3<double> p =
+          T.apply({c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z});
+      if (c == 0) r = {p, p};
+      for (int k = 0; k < 3; ++k) {
+        r.lo[k] = std::min(r.lo[k], p[k]);
+        r.hi[k] = std::max(r.hi[k], p[k]);
+      }
+    }
+    return detail::inflate(r, grow);
+  };
+  const double scene_grow =
+      rp.identity ? 0.0 : 64 * unit * (maxAbs(ha.bounds) + maxAbs(hb.bounds) + tmag) +
+                              std::numeric_limits<double>::min();
+  const Aabb<double> b_in_a = rp.identity ? detail::inflate(hb.bounds, 0)
+                                          : mappedBounds(hb.bounds, rp.b_to_a, scene_grow);
+  const Aabb<double> a_in_b = rp.identity ? detail::inflate(ha.bounds, 0)
+                                          : mappedBounds(ha.bounds, rp.a_to_b, scene_grow);
+
+  auto exact = [&](const Tri& a, std::uint32_t j) {
+    return detail::trianglesIntersect(options.predicate, a.p[0], a.p[1], a.p[2], vb[tb[j][0]],
                                       vb[tb[j][1]], vb[tb[j][2]]);
   };
 
@@ -131,14 +162,15 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
       for (std::size_t i = c * kChunk; i < end; ++i) {
         const double di = ha.diameter[i];
         if (di > hb.d_max) continue;  // nothing in B is as large
-        const Aabb<double> q =
-            detail::triangleBox<double>(va[ta[i][0]], va[ta[i][1]], va[ta[i][2]]);
+        if (!detail::boxesOverlap(ha.boxes[i], b_in_a)) continue;
         const auto ui = std::uint32_t(i);
+        const Tri a = triangleInB(ui);
+        const Aabb<double> q = detail::triangleBox<double>(a.p[0], a.p[1], a.p[2]);
         const bool go = scanCandidates(
             hb, q, di, [&](std::uint32_t, double dj) { return dj >= di ? 1 : -1; },
             [&](std::uint32_t j) {
               ++st.triangle_tests;
-              return exact(ui, j) ? emit({ui, j}) : true;
+              return exact(a, j) ? emit({ui, j}) : true;
             },
             st);
         if (!go) return;
@@ -150,29 +182,26 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
       for (std::size_t j = cb * kChunk; j < end; ++j) {
         const double dj = hb.diameter[j];
         if (dj >= ha.d_max) continue;  // nothing in A is strictly larger
-        Aabb<double> q;
-        if (rp.identity) {
-          q = hb.boxes[j];
-        } else {
-          const Vec3<double> p0 = rp.b_to_a.apply(Vec3<double>{double(vb[tb[j][0]].x),
-                                                               double(vb[tb[j][0]].y),
-                                                               double(vb[tb[j][0]].z)});
-          const Vec3<double> p1 = rp.b_to_a.apply(Vec3<double>{double(vb[tb[j][1]].x),
-                                                               double(vb[tb[j][1]].y),
-                                                               double(vb[tb[j][1]].z)});
-          const Vec3<double> p2 = rp.b_to_a.apply(Vec3<double>{double(vb[tb[j][2]].x),
-                                                               double(vb[tb[j][2]].y),
-                                                               double(vb[tb[j][2]].z)});
-          q = detail::inflate(detail::triangleBox<double>(p0, p1, p2), eps);
+        if (!detail::boxesOverlap(hb.boxes[j], a_in_b)) continue;
+        Aabb<double> q = hb.boxes[j];
+        double grow_abs = 0;
+        if (!rp.identity) {
+          Vec3<double> p[3];
+          for (int k = 0; k < 3; ++k) {
+            const Vec3<S>& b = vb[tb[j][k]];
+            p[k] = rp.b_to_a.apply(Vec3<double>{double(b.x), double(b.y), double(b.z)});
+          }
+          q = detail::triangleBox<double>(p[0], p[1], p[2]);
+          grow_abs = grow_rel * (maxAbs(hb.boxes[j]) + tmag) + std::numeric_limits<double>::min();
         }
         const auto uj = std::uint32_t(j);
         const bool go = scanCandidates(
             ha, q, dj, [&](std::uint32_t, double di) { return di > dj ? 1 : -1; },
             [&](std::uint32_t i) {
               ++st.triangle_tests;
-              return exact(i, uj) ? emit({i, uj}) : true;
+              return exact(triangleInB(i), uj) ? emit({i, uj}) : true;
             },
-            st);
+            st, grow_abs, grow_rel);
         if (!go) return;
       }
     }
@@ -225,17 +254,38 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
 }
 
 }  // namespace cpu
+}  // namespace kdet_fcl
+
+// ---- Backend dispatch: Backend::Cuda (or Auto on a large query with a device) goes to the CUDA
+//      backend behind its host-only seam (cuda/cuda_backend.h). ----
+#ifndef KDET_FCL_HAVE_CUDA
+#define KDET_FCL_HAVE_CUDA 0
+#endif
+#if KDET_FCL_HAVE_CUDA
+#include "../cuda/cuda_backend.h"
+#endif
+
+namespace kdet_fcl {
 
 template <class S>
 QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
                             const QueryOptions& options) {
-  resolveBackend(options.backend, a.numTriangles() + b.numTriangles());  // throws for Cuda
+  // resolveBackend throws BackendUnavailableError for Cuda without a build or a device.
+  if (resolveBackend(options.backend, a.numTriangles() + b.numTriangles()) == Backend::Cuda) {
+#if KDET_FCL_HAVE_CUDA
+    return cuda::intersectMeshes(a, b, options);
+#endif
+  }
   return cpu::intersectMeshes(a, b, options);
 }
 
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options) {
-  resolveBackend(options.backend, mesh.numTriangles());
+  if (resolveBackend(options.backend, mesh.numTriangles()) == Backend::Cuda) {
+#if KDET_FCL_HAVE_CUDA
+    return cuda::intersectSelf(mesh, options);
+#endif
+  }
   return cpu::intersectSelf(mesh, options);
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // The inner loop of every kDet lookup on the CPU, shared by the queries and the k-free analysis.
 
+#include <cmath>
 #include <cstdint>
 
 #include "cpu/hierarchical_hash.h"
@@ -10,22 +11,29 @@ namespace kdet_fcl {
 namespace cpu {
 
 /// Visits every candidate of one query triangle in hierarchy `h`: triangles stored on the query's
-/// level or a coarser one, in cells its box covers, accepted by `accept(id, diameter)` (the size rule: it returns 1 to test the triangle, 0 to
-/// skip it, -1 when it and every later triangle of the cell are too small — cells list their
-/// triangles by decreasing diameter), whose
-/// boxes overlap the query box, seen from the canonical cell of that overlap only. Calls
-/// test_and_emit(j) for each; stops (returns false) when it returns false.
+/// level or a coarser one, in cells its box covers, accepted by `accept(id, diameter)` (the size
+/// rule: 1 tests the triangle, 0 skips it, -1 means it and every later triangle of the cell are
+/// too small, since cells list their triangles by decreasing diameter), whose boxes overlap the
+/// query box, seen from the canonical cell of that overlap only. Calls test_and_emit(j) for each;
+/// stops (returns false) when it returns false.
 template <class S, class Accept, class TestEmit>
-bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<double>& qbox, double dq,
-                    Accept&& accept, TestEmit&& test_and_emit, QueryStats& st) {
-  const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, h.bounds);
-  if (detail::isEmpty(clipped)) return true;
+bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<double>& qbox0,
+                    double dq,
+                    Accept&& accept, TestEmit&& test_and_emit, QueryStats& st,
+                    double grow_abs = 0, double grow_rel = 0) {
   for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
     if (!h.levelOccupied(L)) continue;
+    // Optionally grow the query box per level by grow_abs + grow_rel * (cell edge of level L):
+    // a bound on rounding that depends on the size of the candidates stored on that level.
+    const double grow = grow_abs + grow_rel * h.grid.cell0 * std::ldexp(1.0, L);
+    const detail::Aabb<double> qbox = grow > 0 ? detail::inflate(qbox0, grow) : qbox0;
+    const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, h.bounds);
+    if (detail::isEmpty(clipped)) continue;
     const detail::CellRange r = detail::cellRange(clipped, L, h.grid);
     for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
       for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
         for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
+          ++st.lookups;
           const auto* slot = h.find(detail::makeCellKey(L, x, y, z));
           if (!slot) continue;
           ++st.cells_visited;

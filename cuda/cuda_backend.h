@@ -1,0 +1,66 @@
+#pragma once
+// Host-only seam of the CUDA query backend (cuda_backend.cu). Plain C++17: no CUDA header, so
+// src/cpu/query.cpp, the tests and the benchmarks can include it with any compiler. Only defined
+// when the library is built with CUDA (KDET_FCL_HAVE_CUDA=1).
+//
+// Device-resident state: each HashedMesh that reaches the GPU gets a cache entry (keyed by the
+// HashedMesh's address, its version() and a cheap fingerprint of its arrays) holding its vertices,
+// triangles, per-triangle box/diameter/level and cell table on the device. A new pose uploads
+// nothing but the relative pose; a new version() (updateVertices) uploads the vertices and
+// re-hashes on the device; a topology change (setMesh) uploads the triangles too and rebuilds.
+//
+// Output: every pair is found (the device buffer grows and the query reruns on overflow, which
+// the device detects), then radix-sorted on the device: the result is sorted by (a, b), so it is
+// deterministic but ordered differently from the CPU backend. With max_pairs = k > 0 the GPU
+// computes all pairs and returns the first k of the sorted order (no early stop on the device).
+//
+// Thread safety: one mutex serialises all GPU queries of the process.
+
+#include <cstddef>
+#include <cstdint>
+
+#include "kdet_fcl/hashed_mesh.h"
+#include "kdet_fcl/query.h"
+
+namespace kdet_fcl {
+namespace cuda {
+
+/// intersectMeshes() on device 0. Throws CudaError on a CUDA failure (the device caches are then
+/// dropped, so a later call starts from scratch).
+template <class S>
+QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options);
+
+/// intersectSelf() on device 0.
+template <class S>
+QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options);
+
+/// Device-side times of the last GPU query (CUDA events), for the benchmarks. Recorded only while
+/// setProfiling(true); all zero otherwise.
+struct QueryProfile {
+  double build_ms = 0;    ///< uploads + device re-hash of the meshes that changed (0: rigid)
+  double query_ms = 0;    ///< pose mapping + candidate search + exact tests (all passes)
+  double candidates_ms = 0;  ///< part of query_ms: pose mapping + candidate search (phase 1)
+  double output_ms = 0;   ///< sort of the pairs + device->host copy
+  double total_ms = 0;    ///< first event to last
+  int passes = 0;         ///< query passes (> 1 after an output overflow)
+  std::size_t pairs = 0;  ///< pairs found (before max_pairs truncation)
+  std::size_t candidates = 0;  ///< pairs that reached the exact test
+};
+void setProfiling(bool on);
+QueryProfile lastQueryProfile();
+
+/// Forces the next GPU query of `mesh` to treat it as deformed: re-upload its vertices and
+/// re-hash on the device (what updateVertices() costs on the GPU path). For benchmarks, which
+/// would otherwise also pay for the CPU re-hash of HashedMesh::updateVertices().
+template <class S>
+void markDeformed(const HashedMesh<S>& mesh);
+
+/// Bytes of device memory the backend holds now (cached meshes + scratch buffers).
+std::size_t deviceBytesInUse();
+
+/// Frees every cached mesh and scratch buffer (the next query re-uploads what it needs).
+void releaseDeviceMemory();
+
+}  // namespace cuda
+}  // namespace kdet_fcl

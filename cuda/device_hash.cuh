@@ -1,0 +1,192 @@
+#pragma once
+// The device-side pieces of kDet's hierarchical hash: owning buffers, the copyable views that
+// kernels take by value, and the device functions of the lookup. The geometry (levels, cell keys,
+// boxes, diameters, canonical cells, exact test) comes from include/kdet_fcl/detail, the same
+// KDET_HD functions the CPU backend runs, so both backends decide on bit-identical numbers.
+
+#include <cuda_runtime_api.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+
+#include "cuda_error.cuh"
+#include "kdet_fcl/detail/aabb.h"
+#include "kdet_fcl/detail/hierarchy.h"
+#include "kdet_fcl/vec3.h"
+
+namespace kdet_fcl {
+namespace cuda {
+
+/// A grow-only device allocation (global memory). reserve() never shrinks and does not keep the
+/// contents when it grows; release() is noexcept (used on error paths and at destruction).
+template <class T>
+class DeviceBuffer {
+ public:
+  DeviceBuffer() = default;
+  DeviceBuffer(const DeviceBuffer&) = delete;
+  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+  DeviceBuffer(DeviceBuffer&& o) noexcept : p_(o.p_), cap_(o.cap_) { o.p_ = nullptr, o.cap_ = 0; }
+  DeviceBuffer& operator=(DeviceBuffer&& o) noexcept {
+    std::swap(p_, o.p_);
+    std::swap(cap_, o.cap_);
+    return *this;
+  }
+  ~DeviceBuffer() { release(); }
+
+  /// Makes room for n elements (with 1/8 slack when it must grow, so slowly growing inputs do
+  /// not reallocate every time).
+  void reserve(std::size_t n) {
+    if (n <= cap_ && p_ != nullptr) return;
+    release();
+    const std::size_t want = (n == 0 ? 1 : n + n / 8);
+    void* p = nullptr;
+    CUDA_TRY(cudaMalloc(&p, want * sizeof(T)));
+    p_ = static_cast<T*>(p);
+    cap_ = want;
+  }
+  void release() noexcept {
+    if (p_ != nullptr) (void)cudaFree(p_);
+    p_ = nullptr;
+    cap_ = 0;
+  }
+  T* data() const { return p_; }
+  std::size_t capacity() const { return cap_; }
+  std::size_t bytes() const { return cap_ * sizeof(T); }
+
+ private:
+  T* p_ = nullptr;
+  std::size_t cap_ = 0;
+};
+
+/// What one build of a hierarchy found: the grid (identical to the CPU's, see
+/// HierarchicalHash::build) and the sizes the host needs. Written on the device, read back once
+/// per (re)build.
+struct BuildInfo {
+  detail::GridParams grid;
+  detail::Aabb<double> bounds;
+  double d_min, d_max;
+  unsigned long long level_mask;  ///< bit l: level l holds triangles
+  int top_level;
+  int coord_bits;  ///< bits of a level-0 cell coordinate (every level's coordinates fit)
+  int level_bits;  ///< bits of a level index
+  int fits64;      ///< level_bits + 3 * coord_bits <= 64: the compact 64-bit key is exact
+};
+
+/// Slot value of an empty open-addressing slot.
+constexpr unsigned long long kEmptySlot = ~0ull;
+
+/// A hierarchy on the device, as kernels see it (all pointers: device global memory).
+template <class S>
+struct HashView {
+  const Vec3<S>* v;           ///< vertices, local frame
+  const std::uint32_t* t;     ///< 3 vertex indices per triangle
+  const detail::Aabb<S>* box; ///< per triangle, local frame (exact min/max of S coordinates)
+  const double* diam;         ///< per triangle: enclosing diameter
+  const std::uint32_t* entry_tri;   ///< triangle of each (cell, triangle) entry, grouped by cell
+  const std::uint32_t* cell_begin;  ///< first entry of each cell; cell_begin[cells] = entries
+  const detail::CellKey* cell_key;  ///< full key of each cell
+  const unsigned long long* slots;  ///< open addressing: (hash >> 32) << 32 | cell, or empty
+  unsigned long long slot_mask;     ///< slots - 1 (a power of two minus one)
+  detail::GridParams grid;
+  detail::Aabb<double> bounds;
+  unsigned long long level_mask;
+  int top_level;
+  double d_max;
+};
+
+#if defined(__CUDACC__)
+
+/// The cell index of `key`, or -1 when no triangle occupies that cell. The 32 high hash bits in
+/// the slot only skip most mismatches cheaply; a match is confirmed on the full 128-bit key, so a
+/// bucket or fingerprint collision can neither invent nor lose a candidate.
+template <class S>
+__device__ __forceinline__ int findCell(const HashView<S>& h, const detail::CellKey& key) {
+  const unsigned long long hash = detail::hashCellKey(key);
+  const unsigned int fp = static_cast<unsigned int>(hash >> 32);
+  unsigned long long i = hash & h.slot_mask;
+  while (true) {
+    const unsigned long long s = __ldg(h.slots + i);
+    if (s == kEmptySlot) return -1;
+    if (static_cast<unsigned int>(s >> 32) == fp) {
+      const unsigned int c = static_cast<unsigned int>(s);
+      const detail::CellKey k{__ldg(&h.cell_key[c].hi), __ldg(&h.cell_key[c].lo)};
+      if (k == key) return static_cast<int>(c);
+    }
+    i = (i + 1) & h.slot_mask;
+  }
+}
+
+/// The high 32 bits of a non-negative diameter's bit pattern: monotone in the diameter (the same
+/// order as sizeKey() in cuda_backend.cu, which maps through the ordered bit pattern).
+__device__ __forceinline__ unsigned int sizeKeyOf(double d) {
+  const unsigned long long b = static_cast<unsigned long long>(__double_as_longlong(d));
+  const unsigned long long o = (b >> 63) ? ~b : (b | 0x8000000000000000ull);
+  return static_cast<unsigned int>(o >> 32);
+}
+
+/// The box of triangle j in double (exact: S -> double never rounds).
+template <class S>
+__device__ __forceinline__ detail::Aabb<double> boxOf(const HashView<S>& h, std::uint32_t j) {
+  const detail::Aabb<S> b = h.box[j];
+  return {{double(b.lo.x), double(b.lo.y), double(b.lo.z)},
+          {double(b.hi.x), double(b.hi.y), double(b.hi.z)}};
+}
+
+/// The device twin of cpu::scanCandidates (src/cpu/scan.h), run by a tile of G lanes (a
+/// cooperative-groups tile: 4, 8, 16 or 32) for one query triangle: every triangle j of `h` on the query's level or a coarser one, in a cell the
+/// (clipped) query box covers, accepted by the size rule accept(j, d_j), whose box overlaps the
+/// query box, seen only from the canonical cell of that overlap; calls emit(j) for each. The
+/// lanes stride through each cell's entries, so a heavily loaded cell costs a few rounds of one
+/// tile instead of hundreds of iterations of one thread that its warp would wait for; the cell
+/// lookups are repeated in every lane, so smaller tiles suit lightly loaded cells. All arguments
+/// must be tile-uniform; every lane of the tile must call.
+template <class S, class Tile, class Accept, class Emit>
+__device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h,
+                                                    const detail::Aabb<double>& qbox, double dq,
+                                                    const Tile& tile, Accept&& accept,
+                                                    Emit&& emit) {
+  constexpr unsigned int G = Tile::num_threads();
+  const unsigned int lane = tile.thread_rank();
+  const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, h.bounds);
+  if (detail::isEmpty(clipped)) return;
+  // Cells list their triangles by decreasing sizeKey (cuda_backend.cu); every size rule needs
+  // d_j >= d_query, so the scan of a cell stops at the first entry of a smaller sizeKey.
+  const unsigned int qkey = sizeKeyOf(dq);
+  for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
+    if (!((h.level_mask >> L) & 1ull)) continue;
+    const double scale = detail::levelScale(L);
+    const detail::CellRange r = detail::cellRange(clipped, L, h.grid);
+    // Every lane computes the same lookups (cheap next to the entry scans; a variant in which
+    // the lanes probed different cells of the range and shuffled the hits was measured slower).
+    for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
+      for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
+        for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
+          const int c = findCell(h, detail::makeCellKey(L, x, y, z));  // same in every lane
+          if (c < 0) continue;
+          const std::uint32_t begin = __ldg(h.cell_begin + c), end = __ldg(h.cell_begin + c + 1);
+          for (std::uint32_t base = begin; base < end; base += G) {
+            const std::uint32_t k = base + lane;
+            bool smaller = false;
+            if (k < end) {
+              const std::uint32_t j = __ldg(h.entry_tri + k);
+              const double dj = __ldg(h.diam + j);
+              smaller = sizeKeyOf(dj) < qkey;
+              if (!smaller && accept(j, dj)) {
+                const detail::Aabb<double> eb = boxOf(h, j);
+                if (detail::boxesOverlap(qbox, eb) &&
+                    detail::isCanonicalCell(qbox, eb, scale, h.grid, x, y, z))
+                  emit(j);
+              }
+            }
+            // Entries are sorted: once one lane saw a smaller one, all later rounds are smaller.
+            if (tile.any(smaller)) break;
+          }
+        }
+  }
+}
+
+#endif  // __CUDACC__
+
+}  // namespace cuda
+}  // namespace kdet_fcl

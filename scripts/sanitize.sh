@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Builds the whole test suite with AddressSanitizer + UndefinedBehaviorSanitizer into
+# ${ASAN_BUILD_DIR:-build-asan} (CPU only, no benchmarks) and runs it with ctest. Any sanitizer
+# report aborts the test that triggered it (-fno-sanitize-recover=all), so it fails.
+# Extra arguments go to ctest. Ends with ctest's summary; the exit status is ctest's.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+BUILD="${ASAN_BUILD_DIR:-build-asan}"
+JOBS="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
+flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all -g -O1"
+echo "[sanitize] configuring $BUILD"
+cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS="$flags" \
+  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+  -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
+  -DKDET_FCL_CUDA=OFF -DKDET_FCL_BUILD_BENCHMARKS=OFF >/dev/null
+echo "[sanitize] building $BUILD with $JOBS jobs"
+cmake --build "$BUILD" --parallel "$JOBS" >/dev/null
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+# The install test re-configures a consumer without the sanitizer flags: it checks packaging,
+# which the regular build already covers, so it is left out here.
+exec ctest --test-dir "$BUILD" --output-on-failure -j2 -LE install "$@"

@@ -1,0 +1,409 @@
+// Bad input at every library entry point (issue 6): NaN/Inf coordinates and out-of-range indices
+// give InvalidInputError, files whose headers claim huge counts give MeshFileError at once, an
+// allocation failure under an address-space limit becomes an exception (never an abort), and a
+// failed call changes neither the caller's data nor a HashedMesh's state. The readers' own
+// malformed-file cases live in test_mesh_io.cpp; the CLI's in cli_bad_input.cmake.
+
+#include <gtest/gtest.h>
+#include <malloc.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "test_util.h"
+
+using namespace kdet_fcl;
+namespace fs = std::filesystem;
+
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+#else
+constexpr bool kSanitized = false;
+#endif
+
+template <class S>
+class BadInput : public ::testing::Test {};
+using Precisions = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(BadInput, Precisions);
+
+template <class S>
+TriangleMesh<S> twoCrossing() {
+  TriangleMesh<S> m;
+  m.addTriangle({0, 0, 0}, {2, 0, 0}, {0, 2, 0});
+  m.addTriangle({S(0.5), S(0.5), -1}, {S(0.5), S(0.5), 1}, {S(0.8), S(0.2), 1});
+  return m;
+}
+
+/// Byte-exact equality (NaN-safe: a NaN the caller put in must still be there, bit for bit).
+template <class S>
+bool sameBits(const TriangleMesh<S>& a, const TriangleMesh<S>& b) {
+  return a.vertices.size() == b.vertices.size() && a.triangles.size() == b.triangles.size() &&
+         std::memcmp(a.vertices.data(), b.vertices.data(), a.vertices.size() * sizeof(Vec3<S>)) == 0 &&
+         std::memcmp(a.triangles.data(), b.triangles.data(), a.triangles.size() * sizeof(Triangle)) == 0;
+}
+
+/// Expects fn() to throw InvalidInputError whose message contains `needle`.
+void expectInvalid(const std::function<void()>& fn, const std::string& needle, const char* what) {
+  try {
+    fn();
+    ADD_FAILURE() << what << ": no InvalidInputError";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos)
+        << what << ": message '" << e.what() << "' lacks '" << needle << "'";
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << what << ": wrong exception type: " << e.what();
+  }
+}
+
+/// Every way of making a mesh invalid, with the message part that must name the problem.
+template <class S>
+std::vector<std::pair<TriangleMesh<S>, std::string>> invalidMeshes() {
+  std::vector<std::pair<TriangleMesh<S>, std::string>> out;
+  const S bad[] = {std::numeric_limits<S>::quiet_NaN(), std::numeric_limits<S>::infinity(),
+                   -std::numeric_limits<S>::infinity(), std::numeric_limits<S>::signaling_NaN()};
+  for (const S b : bad)
+    for (int k = 0; k < 3; ++k) {
+      TriangleMesh<S> m = twoCrossing<S>();
+      m.vertices[4][k] = b;
+      out.push_back({m, "vertex 4"});
+    }
+  for (const std::uint32_t idx : {6u, 7u, 1000u, 0xFFFFFFFEu, 0xFFFFFFFFu}) {
+    TriangleMesh<S> m = twoCrossing<S>();
+    m.triangles[1][2] = idx;
+    out.push_back({m, "triangle 1"});
+  }
+  {
+    // An unused vertex is still validated.
+    TriangleMesh<S> m = twoCrossing<S>();
+    m.vertices.push_back({0, std::numeric_limits<S>::quiet_NaN(), 0});
+    out.push_back({m, "vertex 6"});
+  }
+  return out;
+}
+
+}  // namespace
+
+TYPED_TEST(BadInput, EveryEntryPointRejectsInvalidMeshesAndLeavesThemAlone) {
+  using S = TypeParam;
+  const TriangleMesh<S> good = twoCrossing<S>();
+  for (const auto& [bad, needle] : invalidMeshes<S>()) {
+    const TriangleMesh<S> copy = bad;
+    expectInvalid([&] { HashedMesh<S> h(bad); }, needle, "HashedMesh");
+    expectInvalid([&] { bad.validate(); }, needle, "validate");
+    expectInvalid([&] { (void)analyzeKFree(bad); }, needle, "analyzeKFree");
+    expectInvalid([&] { (void)analyzeKFreeBruteForce(bad); }, needle, "analyzeKFreeBruteForce");
+    expectInvalid([&] { (void)bruteForceIntersectSelf(bad); }, needle, "bruteForceIntersectSelf");
+    expectInvalid([&] { (void)bruteForceIntersectMeshes(bad, {}, good, {}); }, needle,
+                  "bruteForceIntersectMeshes (first)");
+    expectInvalid([&] { (void)bruteForceIntersectMeshes(good, {}, bad, {}); }, needle,
+                  "bruteForceIntersectMeshes (second)");
+    EXPECT_TRUE(sameBits(bad, copy)) << "a failed call changed the caller's mesh";
+  }
+}
+
+TYPED_TEST(BadInput, AFailedChangeKeepsTheHashedMeshAsItWas) {
+  using S = TypeParam;
+  const TriangleMesh<S> mesh = makeDrapedCloth<S>(12, S(4), S(1), S(0.03), S(1));
+  const TriangleMesh<S> ball = makeSphere<S>({0, 0, 0}, S(1), 16, 8);
+  HashedMesh<S> h(mesh), b(ball);
+  const auto self0 = kdet_test::sorted(intersectSelf(h).pairs);
+  const auto pair0 = kdet_test::sorted(intersectMeshes(h, b).pairs);
+  ASSERT_FALSE(self0.empty());
+  ASSERT_FALSE(pair0.empty());
+  const std::uint64_t v0 = h.version();
+  const auto unchanged = [&](const char* what) {
+    EXPECT_EQ(h.version(), v0) << what;
+    EXPECT_TRUE(sameBits(h.mesh(), mesh)) << what;
+    EXPECT_TRUE(h.pose().isIdentity()) << what;
+    EXPECT_EQ(kdet_test::sorted(intersectSelf(h).pairs), self0) << what;
+    EXPECT_EQ(kdet_test::sorted(intersectMeshes(h, b).pairs), pair0) << what;
+  };
+  // updateVertices: wrong counts, non-finite coordinates.
+  for (const std::size_t n : {std::size_t(0), mesh.vertices.size() - 1, mesh.vertices.size() + 1}) {
+    std::vector<Vec3<S>> v(n, Vec3<S>{0, 0, 0});
+    EXPECT_THROW(h.updateVertices(v), InvalidInputError);
+    unchanged("updateVertices(count)");
+  }
+  for (const S bad : {std::numeric_limits<S>::quiet_NaN(), std::numeric_limits<S>::infinity()}) {
+    std::vector<Vec3<S>> v = mesh.vertices;
+    v.back().y = bad;
+    const std::vector<Vec3<S>> copy = v;
+    expectInvalid([&] { h.updateVertices(v); }, "vertex " + std::to_string(v.size() - 1),
+                  "updateVertices(NaN)");
+    EXPECT_EQ(std::memcmp(v.data(), copy.data(), v.size() * sizeof v[0]), 0);
+    unchanged("updateVertices(non-finite)");
+  }
+  // setMesh: every invalid mesh (passed by copy: the caller's copy must survive unchanged).
+  for (const auto& [bad, needle] : invalidMeshes<S>()) {
+    const TriangleMesh<S> copy = bad;
+    expectInvalid([&] { h.setMesh(bad); }, needle, "setMesh");
+    EXPECT_TRUE(sameBits(bad, copy));
+    unchanged("setMesh");
+  }
+  // setPose: non-finite and non-rigid.
+  Transform<S> P;
+  P.t.z = std::numeric_limits<S>::quiet_NaN();
+  EXPECT_THROW(h.setPose(P), InvalidInputError);
+  P = Transform<S>{};
+  P.R[0][1] = S(0.5);
+  EXPECT_THROW(h.setPose(P), InvalidInputError);
+  unchanged("setPose");
+  // A HashedMesh built with a bad pose is not built at all.
+  EXPECT_THROW(HashedMesh<S>(mesh, P), InvalidInputError);
+  // The CUDA backend, where unavailable, is a typed error too, and changes nothing.
+  if (!builtWithCuda() || cudaDeviceCount() == 0) {
+    QueryOptions o;
+    o.backend = Backend::Cuda;
+    EXPECT_THROW(intersectSelf(h, o), BackendUnavailableError);
+    EXPECT_THROW(intersectMeshes(h, b, o), BackendUnavailableError);
+    unchanged("Backend::Cuda");
+  }
+}
+
+/// The brute-force references take poses without a HashedMesh to check them. Record what they do
+/// with a non-finite pose: they must not crash (they may throw InvalidInputError).
+TYPED_TEST(BadInput, BruteForceWithANonFinitePoseDoesNotCrash) {
+  using S = TypeParam;
+  const TriangleMesh<S> m = twoCrossing<S>();
+  Transform<S> P;
+  P.t.x = std::numeric_limits<S>::quiet_NaN();
+  try {
+    const auto pairs = bruteForceIntersectMeshes(m, P, m, Transform<S>{});
+    std::printf("bruteForceIntersectMeshes with a NaN pose: no exception, %zu pairs\n", pairs.size());
+  } catch (const InvalidInputError& e) {
+    std::printf("bruteForceIntersectMeshes with a NaN pose: %s\n", e.what());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Files whose headers claim huge counts: a MeshFileError at once, without a huge allocation.
+
+class HugeCounts : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("kdet_bad_input_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  std::string write(const std::string& name, const std::string& content) {
+    const std::string p = (dir_ / name).string();
+    std::ofstream(p, std::ios::binary) << content;
+    return p;
+  }
+  fs::path dir_;
+};
+
+TEST_F(HugeCounts, ClaimedCountsBeyondTheDataFailFast) {
+  const std::string tri = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string stl_head(80, ' ');
+  const std::string files[][2] = {
+      {"a.off", "OFF\n4000000000 1 0\n" + tri},
+      {"b.off", "OFF\n3 4000000000 0\n" + tri},
+      {"c.off", "OFF\n99999999999999999999 1 0\n" + tri},
+      {"d.off", "OFF\n18446744073709551615 18446744073709551615 0\n" + tri},
+      {"e.ply", "ply\nformat ascii 1.0\nelement vertex 4294967294\nproperty float x\nproperty float y\n"
+                "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n" + tri},
+      {"f.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                "property float z\nelement face 18446744073709551615\nproperty list uchar int "
+                "vertex_indices\nend_header\n" + tri},
+      {"g.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty double x\n"
+                "property double y\nproperty double z\nend_header\n" + std::string(48, '\0')},
+      {"h.stl", stl_head + std::string("\xff\xff\xff\x7f", 4) + std::string(100, '\0')},
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  for (const auto& f : files) {
+    const std::string p = write(f[0], f[1]);
+    for (int prec = 0; prec < 2; ++prec) {
+      try {
+        if (prec)
+          (void)readMesh<double>(p);
+        else
+          (void)readMesh<float>(p);
+        ADD_FAILURE() << f[0] << ": no MeshFileError";
+      } catch (const MeshFileError& e) {
+        EXPECT_NE(std::string(e.what()).find(f[0]), std::string::npos) << e.what();
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << f[0] << ": wrong exception: " << e.what();
+      }
+    }
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Out of memory. Each case runs in a forked child whose address space is limited (soft
+// RLIMIT_AS) to its current size plus a small headroom; the child reports how the allocation
+// failure surfaced through its exit code. A signal (abort, std::terminate, a crash) fails the
+// test. Skipped under AddressSanitizer, which reserves terabytes of shadow address space.
+
+enum ChildResult : int {
+  kOk = 0,             // the expected typed error
+  kBadAlloc = 10,      // std::bad_alloc escaped (documented for HashedMesh and the queries)
+  kOtherError = 11,    // some other std::exception
+  kNoError = 12,       // the call succeeded despite the limit (limit too generous)
+  kStateChanged = 13,  // after the failure, the object no longer behaves as before
+};
+
+std::size_t currentAddressSpace() {
+  std::ifstream in("/proc/self/statm");
+  std::size_t pages = 0;
+  in >> pages;
+  return pages * std::size_t(::sysconf(_SC_PAGESIZE));
+}
+
+void limitAddressSpace(std::size_t headroom) {
+  rlimit r{};
+  ::getrlimit(RLIMIT_AS, &r);
+  r.rlim_cur = currentAddressSpace() + headroom;
+  ::setrlimit(RLIMIT_AS, &r);
+}
+
+void unlimitAddressSpace() {
+  rlimit r{};
+  ::getrlimit(RLIMIT_AS, &r);
+  r.rlim_cur = r.rlim_max;
+  ::setrlimit(RLIMIT_AS, &r);
+}
+
+/// Runs body() in a child; returns its exit code, or -signal.
+int inChild(const std::function<int()>& body) {
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    int code = kOtherError;
+    try {
+      code = body();
+    } catch (...) {
+      code = kOtherError;
+    }
+    std::fflush(nullptr);
+    ::_exit(code);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  if (WIFSIGNALED(status)) return -WTERMSIG(status);
+  return WEXITSTATUS(status);
+}
+
+TEST(OutOfMemory, AReaderTurnsAllocationFailureIntoMeshFileError) {
+  if (kSanitized) GTEST_SKIP() << "RLIMIT_AS and AddressSanitizer do not mix";
+  // A valid binary STL of 400k triangles (20 MB); reading needs the file image plus ~30 MB.
+  const std::string p = (fs::temp_directory_path() / ("kdet_oom_" + std::to_string(::getpid()) + ".stl")).string();
+  {
+    TriangleMesh<float> m = makeRandomSoup<float>(400000, 10.f, 0.01f, 0.1f, 1);
+    writeMesh(m, p);
+  }
+  const int rc = inChild([&] {
+    limitAddressSpace(8u << 20);
+    try {
+      (void)readMesh<double>(p);
+      return int(kNoError);
+    } catch (const MeshFileError& e) {
+      return std::strstr(e.what(), "out of memory") ? int(kOk) : int(kOtherError);
+    } catch (const std::bad_alloc&) {
+      return int(kBadAlloc);
+    }
+  });
+  fs::remove(p);
+  EXPECT_EQ(rc, kOk) << "(negative: killed by signal " << -rc << ")";
+}
+
+/// HashedMesh (construction, setMesh, updateVertices) and the queries let std::bad_alloc
+/// propagate: it is a typed standard exception, not an abort (documented in docs/numerics.md).
+TEST(OutOfMemory, HashedMeshAllocationFailureIsAnException) {
+  if (kSanitized) GTEST_SKIP() << "RLIMIT_AS and AddressSanitizer do not mix";
+  const TriangleMesh<double> big = makeRandomSoup<double>(300000, 10.0, 0.01, 0.1, 2);
+  for (const int threads : {1, 0}) {
+    const int rc = inChild([&] {
+      limitAddressSpace(4u << 20);
+      try {
+        HashedMesh<double> h(big, Transform<double>{}, threads);
+        return int(kNoError);
+      } catch (const std::bad_alloc&) {
+        return int(kBadAlloc);
+      } catch (const Error&) {
+        return int(kOk);
+      }
+    });
+    EXPECT_TRUE(rc == kBadAlloc || rc == kOk) << "threads " << threads << ": child result " << rc
+                                              << " (negative: killed by signal)";
+  }
+}
+
+/// README: "On error, a HashedMesh keeps its previous state." setMesh and updateVertices are run
+/// under address-space limits growing in 2 MiB steps (each in a fresh child), from "fails at
+/// once" to "succeeds", so that the failure hits every allocation on the way, inside the rebuild
+/// too. After each failure the object must still hold the old geometry and answer queries on it.
+/// (Regression: the rebuild used to clear the old hash before allocating the new one.)
+TEST(OutOfMemory, AFailedRebuildKeepsThePreviousState) {
+  if (kSanitized) GTEST_SKIP() << "RLIMIT_AS and AddressSanitizer do not mix";
+  // Large blocks always from mmap (no dynamic threshold): a freed vector leaves no reusable heap.
+  ::mallopt(M_MMAP_THRESHOLD, 64 * 1024);
+  const TriangleMesh<double> small = makeDrapedCloth<double>(10, 4.0, 1.0, 0.03, 1.0);
+  const TriangleMesh<double> big = makeRandomSoup<double>(300000, 12.0, 0.01, 0.3, 3);
+  const auto want_small = bruteForceIntersectSelf(small);
+  ASSERT_FALSE(want_small.empty());
+  for (const bool vertices_only : {false, true}) {
+    // Built in the parent; every child inherits it (copy-on-write) and tries one limit.
+    HashedMesh<double> h(vertices_only ? big : small, Transform<double>{}, 1);
+    const auto want = kdet_test::sorted(intersectSelf(h).pairs);
+    std::vector<Vec3<double>> moved = big.vertices;
+    for (auto& p : moved) p = p * 1.0001;
+    int failures = 0, successes = 0, broken = 0, signals = 0;
+    for (std::size_t headroom = 0; headroom <= (256u << 20) && successes == 0; headroom += 2u << 20) {
+      TriangleMesh<double> replacement = big;  // moved into setMesh: the call itself copies nothing
+      ::malloc_trim(0);  // return free heap to the system, so that the limit bites
+      const int rc = inChild([&] {
+        limitAddressSpace(headroom);
+        try {
+          if (vertices_only)
+            h.updateVertices(moved);
+          else
+            h.setMesh(std::move(replacement));
+        } catch (const std::bad_alloc&) {
+          unlimitAddressSpace();
+          const bool same = (vertices_only ? std::memcmp(h.mesh().vertices.data(), big.vertices.data(),
+                                                         big.vertices.size() * sizeof(Vec3<double>)) == 0
+                                           : h.numTriangles() == small.triangles.size()) &&
+                            kdet_test::sorted(intersectSelf(h).pairs) == want;
+          return int(same ? kOk : kStateChanged);
+        }
+        return int(kNoError);
+      });
+      failures += rc == kOk;
+      successes += rc == kNoError;
+      broken += rc == kStateChanged || rc == kOtherError;
+      signals += rc < 0;
+    }
+    std::printf("%s under growing memory limits: %d clean failures, %d left a changed state, "
+                "%d killed by a signal, then success: %d\n",
+                vertices_only ? "updateVertices" : "setMesh", failures, broken, signals, successes);
+    EXPECT_GT(failures + broken + signals, 0) << "the limit never bit";
+    EXPECT_EQ(broken, 0) << (vertices_only ? "updateVertices" : "setMesh")
+                         << ": a failed rebuild left the HashedMesh changed";
+    EXPECT_EQ(signals, 0) << "a failed rebuild crashed";
+    EXPECT_EQ(successes, 1);
+  }
+}

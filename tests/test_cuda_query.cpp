@@ -1,0 +1,331 @@
+// The CUDA backend against the CPU backend: the same pair sets, exactly (LABELS cuda). Every test
+// skips where no CUDA device is usable, except the one that checks the typed error there.
+//
+// Data files: $KDET_FCL_DATA_DIR when set (an offline GPU machine gets a copy of the needed
+// ../shared/data files there), else KDET_FCL_SHARED_DATA; tests that need them skip without.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <iostream>
+#include <filesystem>
+#include <optional>
+#include <random>
+#include <string>
+
+#include "test_util.h"
+
+#if KDET_FCL_TEST_HAVE_CUDA
+#include "../cuda/cuda_backend.h"
+#endif
+
+using namespace kdet_fcl;
+using kdet_test::sorted;
+
+namespace {
+
+#define SKIP_WITHOUT_DEVICE()                                                          \
+  do {                                                                                 \
+    if (cudaDeviceCount() == 0)                                                        \
+      GTEST_SKIP() << (builtWithCuda() ? "no CUDA device" : "built without CUDA");     \
+  } while (0)
+
+std::string dataFile(const std::string& rel) {
+  const char* env = std::getenv("KDET_FCL_DATA_DIR");
+  const std::filesystem::path root = (env && *env) ? std::filesystem::path(env)
+                                                   : std::filesystem::path(KDET_FCL_SHARED_DATA);
+  const std::filesystem::path p = root / rel;
+  return std::filesystem::exists(p) ? p.string() : std::string();
+}
+
+QueryOptions on(Backend b, std::size_t max_pairs = 0, Predicate pred = Predicate::Exact) {
+  QueryOptions o;
+  o.backend = b;
+  o.max_pairs = max_pairs;
+  o.predicate = pred;
+  return o;
+}
+
+bool strictlySorted(const std::vector<TrianglePair>& v) {
+  for (std::size_t k = 1; k < v.size(); ++k)
+    if (!(v[k - 1] < v[k])) return false;
+  return true;
+}
+
+/// GPU pairs == CPU pairs as sets; the GPU's are sorted by (a, b) and unique.
+template <class S>
+std::size_t expectSameInter(const HashedMesh<S>& a, const HashedMesh<S>& b, const std::string& what,
+                            Predicate pred = Predicate::Exact) {
+  const QueryResult cpu = intersectMeshes(a, b, on(Backend::Cpu, 0, pred));
+  const QueryResult gpu = intersectMeshes(a, b, on(Backend::Cuda, 0, pred));
+  EXPECT_TRUE(gpu.complete) << what;
+  EXPECT_TRUE(strictlySorted(gpu.pairs)) << what << ": GPU output not sorted/unique";
+  EXPECT_EQ(gpu.pairs, sorted(cpu.pairs)) << what;
+  return cpu.pairs.size();
+}
+
+template <class S>
+std::size_t expectSameSelf(const HashedMesh<S>& m, const std::string& what,
+                           Predicate pred = Predicate::Exact) {
+  const QueryResult cpu = intersectSelf(m, on(Backend::Cpu, 0, pred));
+  const QueryResult gpu = intersectSelf(m, on(Backend::Cuda, 0, pred));
+  EXPECT_TRUE(strictlySorted(gpu.pairs)) << what << ": GPU output not sorted/unique";
+  EXPECT_EQ(gpu.pairs, sorted(cpu.pairs)) << what;
+  for (const auto& p : gpu.pairs) EXPECT_LT(p.a, p.b);
+  return cpu.pairs.size();
+}
+
+template <class S>
+class CudaQueryTyped : public ::testing::Test {};
+using Precisions = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(CudaQueryTyped, Precisions);
+
+}  // namespace
+
+TEST(CudaQuery, CudaWithoutDeviceIsATypedError) {
+  // With a device there is nothing to check here (and no skip: an offline GPU check treats a
+  // skipped CUDA test as a device the runtime did not find).
+  if (cudaDeviceCount() > 0) return;
+  HashedMesh<double> a(makeSphere<double>({0, 0, 0}, 1.0, 8, 4));
+  EXPECT_THROW(intersectMeshes(a, a, on(Backend::Cuda)), BackendUnavailableError);
+  EXPECT_THROW(intersectSelf(a, on(Backend::Cuda)), BackendUnavailableError);
+  EXPECT_EQ(resolveBackend(Backend::Auto, 100'000'000), Backend::Cpu);
+  EXPECT_NO_THROW(intersectSelf(a, on(Backend::Auto)));
+}
+
+TEST(CudaQuery, ResolvesToCudaWithADevice) {
+  SKIP_WITHOUT_DEVICE();
+  EXPECT_EQ(resolveBackend(Backend::Cuda, 10), Backend::Cuda);
+  EXPECT_EQ(resolveBackend(Backend::Auto, autoCudaMinTriangles()), Backend::Cuda);
+  EXPECT_EQ(resolveBackend(Backend::Auto, autoCudaMinTriangles() - 1), Backend::Cpu);
+  EXPECT_EQ(resolveBackend(Backend::Cpu, 100'000'000), Backend::Cpu);
+  std::cout << "[ device   ] " << cudaDeviceDescription(0) << "\n";
+}
+
+TYPED_TEST(CudaQueryTyped, RandomSoupsOfSeveralSizeDistributions) {
+  SKIP_WITHOUT_DEVICE();
+  using S = TypeParam;
+  struct Dist {
+    S min_size, max_size;
+    const char* name;
+  };
+  const Dist dists[] = {{S(0.5), S(0.5), "equal sizes"},
+                        {S(0.05), S(2), "log-uniform 40x"},
+                        {S(0.001), S(8), "log-uniform 8000x"}};
+  std::mt19937_64 rng(4242);
+  std::size_t total = 0;
+  for (const Dist& d : dists)
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      const std::size_t na = 300 + 700 * seed, nb = 200 + 500 * seed;
+      HashedMesh<S> a(makeRandomSoup<S>(na, S(6), d.min_size, d.max_size, seed),
+                      kdet_test::randomPose<S>(rng, -1, 1));
+      HashedMesh<S> b(makeRandomSoup<S>(nb, S(6), d.min_size, d.max_size, seed + 100),
+                      kdet_test::randomPose<S>(rng, -1, 1));
+      const std::string what = std::string(d.name) + " seed " + std::to_string(seed);
+      total += expectSameInter(a, b, what + " posed");
+      total += expectSameInter(b, a, what + " posed, swapped");
+      a.setPose(Transform<S>());
+      b.setPose(Transform<S>());
+      total += expectSameInter(a, b, what + " identity");
+      total += expectSameSelf(a, what + " self");
+      total += expectSameSelf(b, what + " self b");
+    }
+  EXPECT_GT(total, 100u);
+}
+
+TYPED_TEST(CudaQueryTyped, ClothOverSphereAndSelf) {
+  SKIP_WITHOUT_DEVICE();
+  using S = TypeParam;
+  for (int n : {24, 110}) {
+    HashedMesh<S> cloth(makeDrapedCloth<S>(n, S(4), S(1), S(0.03), S(1)));
+    HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, S(1), 24 + n / 2, 12 + n / 4));
+    EXPECT_GT(expectSameInter(cloth, sphere, "cloth/sphere"), 0u);
+    EXPECT_GT(expectSameSelf(cloth, "cloth self"), 0u);
+    EXPECT_EQ(expectSameSelf(sphere, "sphere self"), 0u);
+    // Random rigid motions of the sphere: only the pose changes on the device.
+    std::mt19937_64 rng(7 + n);
+    for (int k = 0; k < 5; ++k) {
+      sphere.setPose(kdet_test::randomPose<S>(rng, -0.5, 0.5));
+      expectSameInter(cloth, sphere, "cloth/posed sphere " + std::to_string(k));
+      expectSameInter(sphere, cloth, "posed sphere/cloth " + std::to_string(k));
+    }
+  }
+}
+
+TYPED_TEST(CudaQueryTyped, SameMeshOnBothSidesAndEmptyMeshes) {
+  SKIP_WITHOUT_DEVICE();
+  using S = TypeParam;
+  HashedMesh<S> s(makeSphere<S>({0, 0, 0}, S(1), 16, 8));
+  EXPECT_GT(expectSameInter(s, s, "sphere against itself"), 0u);
+  HashedMesh<S> empty{TriangleMesh<S>()};
+  EXPECT_TRUE(intersectMeshes(s, empty, on(Backend::Cuda)).pairs.empty());
+  EXPECT_TRUE(intersectMeshes(empty, s, on(Backend::Cuda)).pairs.empty());
+  EXPECT_TRUE(intersectSelf(empty, on(Backend::Cuda)).pairs.empty());
+}
+
+TEST(CudaQuery, FclEnvAgainstRobUnderRandomPoses) {
+  SKIP_WITHOUT_DEVICE();
+  const std::string env = dataFile("fcl/env.obj"), rob = dataFile("fcl/rob.obj");
+  if (env.empty() || rob.empty()) GTEST_SKIP() << "fcl/env.obj, fcl/rob.obj absent";
+  HashedMesh<double> henv(readMesh<double>(env)), hrob(readMesh<double>(rob));
+  HashedMesh<float> fenv(readMesh<float>(env)), frob(readMesh<float>(rob));
+  std::mt19937_64 rng(2024);
+  int colliding = 0;
+  for (int k = 0; k < 100; ++k) {
+    Transform<double> pose = kdet_test::randomPose<double>(rng, -3000, 3000);
+    pose.t.z = std::abs(pose.t.z) / 2;
+    henv.setPose(pose);
+    colliding += expectSameInter(henv, hrob, "env/rob pose " + std::to_string(k)) > 0;
+    Transform<float> fpose;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) fpose.R[i][j] = float(pose.R[i][j]);
+    fpose.t = {float(pose.t.x), float(pose.t.y), float(pose.t.z)};
+    // A float rotation may be rejected as not orthonormal enough; skip those poses.
+    try {
+      fenv.setPose(fpose);
+    } catch (const InvalidInputError&) {
+      continue;
+    }
+    expectSameInter(fenv, frob, "env/rob float pose " + std::to_string(k));
+  }
+  EXPECT_GT(colliding, 10);
+  expectSameSelf(henv, "env self");
+}
+
+TEST(CudaQuery, UncClothBallAndFunnelFrames) {
+  SKIP_WITHOUT_DEVICE();
+  const std::string f92 = dataFile("unc/cloth-ball/cloth_ball92.ply");
+  const std::string f93 = dataFile("unc/cloth-ball/cloth_ball93.ply");
+  if (f92.empty() || f93.empty()) GTEST_SKIP() << "unc/cloth-ball absent";
+  HashedMesh<float> a(readMesh<float>(f92)), b(readMesh<float>(f93));
+  expectSameSelf(a, "cloth_ball92 self");
+  expectSameSelf(b, "cloth_ball93 self");
+  EXPECT_GT(expectSameInter(a, b, "cloth_ball92 vs 93"), 1000u);
+  std::mt19937_64 rng(93);
+  for (int k = 0; k < 3; ++k) {
+    b.setPose(kdet_test::randomPose<float>(rng, -0.05, 0.05));
+    expectSameInter(a, b, "cloth_ball92 vs posed 93, " + std::to_string(k));
+  }
+  const std::string g227 = dataFile("unc/cloth-funnel/227.ply");
+  const std::string g228 = dataFile("unc/cloth-funnel/228.ply");
+  if (g227.empty() || g228.empty()) return;
+  HashedMesh<double> c(readMesh<double>(g227)), d(readMesh<double>(g228));
+  expectSameSelf(c, "funnel 227 self");
+  expectSameInter(c, d, "funnel 227 vs 228");
+}
+
+TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
+  SKIP_WITHOUT_DEVICE();
+  HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 0.0));
+  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
+  EXPECT_EQ(expectSameInter(cloth, sphere, "flat"), 0u);
+  for (double t : {0.3, 0.7, 1.0}) {
+    cloth.updateVertices(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, t).vertices);
+    expectSameInter(cloth, sphere, "t = " + std::to_string(t));
+    expectSameSelf(cloth, "self t = " + std::to_string(t));
+  }
+  TriangleMesh<double> broken;
+  broken.vertices = cloth.mesh().vertices;
+  for (std::size_t i = 0; i < cloth.mesh().triangles.size(); i += 2)
+    broken.triangles.push_back(cloth.mesh().triangles[i]);
+  broken.addTriangle({-2, -2, 0}, {2, -2, 0}, {0, 2, 0});
+  cloth.setMesh(broken);
+  EXPECT_GT(expectSameInter(cloth, sphere, "fractured"), 0u);
+  expectSameSelf(cloth, "fractured self");
+  // Same triangle count, other topology: the device triangles must be re-uploaded.
+  TriangleMesh<double> shuffled = broken;
+  std::mt19937_64 rng(5);
+  std::shuffle(shuffled.triangles.begin(), shuffled.triangles.end(), rng);
+  cloth.setMesh(shuffled);
+  expectSameInter(cloth, sphere, "shuffled triangles");
+  expectSameSelf(cloth, "shuffled self");
+}
+
+TEST(CudaQuery, NewMeshesAtTheSameAddressAreNotConfused) {
+  SKIP_WITHOUT_DEVICE();
+  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 24, 12));
+  std::optional<HashedMesh<double>> cloth;
+  for (double t : {0.2, 0.5, 0.8, 1.0}) {
+    cloth.emplace(makeDrapedCloth<double>(40, 4.0, 1.0, 0.03, t));  // same address, version 0
+    expectSameInter(*cloth, sphere, "fresh cloth t = " + std::to_string(t));
+    expectSameSelf(*cloth, "fresh cloth self t = " + std::to_string(t));
+  }
+}
+
+TEST(CudaQuery, HugeSizeRatioUsesFull128BitKeys) {
+  SKIP_WITHOUT_DEVICE();
+  // Cell coordinates need > 21 bits per axis here, so the device sorts full 128-bit keys.
+  TriangleMesh<double> m = makeRandomSoup<double>(3000, 2.0, 1e-4, 0.05, 11);
+  m.addTriangle({-1e6, -1e6, 0.3}, {1e6, -1e6, 0.3}, {0, 1e6, 0.3});
+  m.addTriangle({-1e6, 0.2, -1e6}, {1e6, 0.2, -1e6}, {0, 0.2, 1e6});
+  HashedMesh<double> a(m), b(makeRandomSoup<double>(2000, 2.0, 1e-4, 0.05, 12));
+  EXPECT_GT(expectSameSelf(a, "stadium self"), 0u);
+  EXPECT_GT(expectSameInter(a, b, "stadium vs soup"), 0u);
+  expectSameInter(b, a, "soup vs stadium");
+}
+
+TEST(CudaQuery, OutputOverflowGrowsAndReruns) {
+  SKIP_WITHOUT_DEVICE();
+  HashedMesh<double> cloth(makeDrapedCloth<double>(80, 4.0, 1.0, 0.03, 1.0));
+  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 48, 24));
+  const auto cpu_inter = sorted(intersectMeshes(cloth, sphere).pairs);
+  const auto cpu_self = sorted(intersectSelf(cloth).pairs);
+  ASSERT_GT(cpu_inter.size(), 10u);
+  ASSERT_GT(cpu_self.size(), 10u);
+#if KDET_FCL_TEST_HAVE_CUDA
+  cuda::setProfiling(true);
+#endif
+  for (const char* cap : {"1", "3", "10"}) {
+    ASSERT_EQ(setenv("KDET_FCL_CUDA_PAIR_CAPACITY", cap, 1), 0);
+    EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs, cpu_inter) << cap;
+#if KDET_FCL_TEST_HAVE_CUDA
+    EXPECT_GE(cuda::lastQueryProfile().passes, 2) << "the overflow path did not run";
+#endif
+    EXPECT_EQ(intersectSelf(cloth, on(Backend::Cuda)).pairs, cpu_self) << cap;
+  }
+  unsetenv("KDET_FCL_CUDA_PAIR_CAPACITY");
+#if KDET_FCL_TEST_HAVE_CUDA
+  cuda::setProfiling(false);
+#endif
+}
+
+TEST(CudaQuery, MaxPairsReturnsAPrefixOfTheSortedOrder) {
+  SKIP_WITHOUT_DEVICE();
+  HashedMesh<double> cloth(makeDrapedCloth<double>(40, 4.0, 1.0, 0.03, 1.0));
+  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
+  const QueryResult all = intersectMeshes(cloth, sphere, on(Backend::Cuda));
+  ASSERT_GT(all.pairs.size(), 20u);
+  for (std::size_t k : {std::size_t(1), std::size_t(5), std::size_t(20)}) {
+    const QueryResult part = intersectMeshes(cloth, sphere, on(Backend::Cuda, k));
+    ASSERT_EQ(part.pairs.size(), k);
+    EXPECT_FALSE(part.complete);
+    EXPECT_TRUE(std::equal(part.pairs.begin(), part.pairs.end(), all.pairs.begin()));
+  }
+  const QueryResult more = intersectMeshes(cloth, sphere, on(Backend::Cuda, all.pairs.size() + 1));
+  EXPECT_EQ(more.pairs, all.pairs);
+  EXPECT_TRUE(more.complete);
+  QueryOptions yes = on(Backend::Cuda);
+  EXPECT_TRUE(meshesIntersect(cloth, sphere, yes));
+  // Deterministic: the same query gives the same order every time.
+  for (int r = 0; r < 3; ++r) EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs, all.pairs);
+}
+
+TEST(CudaQuery, InexactPredicatesMatchTheCpuToo) {
+  SKIP_WITHOUT_DEVICE();
+  HashedMesh<float> cloth(makeDrapedCloth<float>(50, 4.f, 1.f, 0.03f, 1.f));
+  HashedMesh<float> sphere(makeSphere<float>({0, 0, 0}, 1.f, 32, 16));
+  for (Predicate p : {Predicate::Double, Predicate::Float}) {
+    expectSameInter(cloth, sphere, "plain predicate", p);
+    expectSameSelf(cloth, "plain predicate self", p);
+  }
+}
+
+TEST(CudaQuery, AutoPicksTheGpuForLargeQueries) {
+  SKIP_WITHOUT_DEVICE();
+  HashedMesh<double> cloth(makeDrapedCloth<double>(150, 4.0, 1.0, 0.03, 1.0));  // 45k triangles
+  ASSERT_GE(cloth.numTriangles(), autoCudaMinTriangles());
+  const QueryResult a = intersectSelf(cloth, on(Backend::Auto));
+  EXPECT_TRUE(strictlySorted(a.pairs));  // the GPU's output is sorted
+  EXPECT_EQ(a.pairs, sorted(intersectSelf(cloth).pairs));
+}

@@ -1,0 +1,225 @@
+// kdet_fcl::Mesh<S> (issue 3): a BVHModel<OBBRSS> that FCL's own collide, objects and managers
+// accept with FCL's results, whose kDet hash follows every build, update and replace, and whose
+// KdetOnly mode skips FCL's refits.
+
+#include <gtest/gtest.h>
+
+#include "fcl_test_util.h"
+#include "test_util.h"
+
+using namespace kdet_fcl_test;
+using kdet_fcl::TriangleMesh;
+
+namespace {
+
+std::vector<fcl::Vector3d> shifted(const TriangleMesh<double>& m, double dz) {
+  std::vector<fcl::Vector3d> ps;
+  for (const auto& v : m.vertices) ps.emplace_back(v.x, v.y, v.z + dz);
+  return ps;
+}
+
+struct Scene {
+  TriangleMesh<double> ball = kdet_fcl::makeSphere<double>({0, 0, 0}, 1.0, 32, 16);
+  TriangleMesh<double> cloth = kdet_fcl::makeDrapedCloth<double>(24, 3.0, 1.0, 0.05, 1.0);
+};
+
+}  // namespace
+
+TEST(FclMesh, IsABVHModelAndFclGivesFclsResult) {
+  Scene s;
+  auto km = makeModel<kdet_fcl::Meshd>(s.ball);
+  auto fm = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(s.ball);
+  auto cloth = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(s.cloth);
+  EXPECT_EQ(km->getModelType(), fcl::BVH_MODEL_TRIANGLES);
+  EXPECT_EQ(km->getNodeType(), fcl::BV_OBBRSS);
+  EXPECT_EQ(km->getObjectType(), fcl::OT_BVH);
+  EXPECT_EQ(km->num_tris, int(s.ball.triangles.size()));
+  EXPECT_EQ(km->num_vertices, int(s.ball.vertices.size()));
+  EXPECT_EQ(km->getNumBVs(), fm->getNumBVs());
+  EXPECT_TRUE(kdet_fcl::isKdetMesh<double>(km.get()));
+
+  std::mt19937_64 rng(11);
+  const double lo[3] = {-0.3, -0.3, -0.3}, hi[3] = {0.3, 0.3, 0.3};
+  for (int i = 0; i < 10; ++i) {
+    const fcl::Transform3d tf = randomPose<double>(rng, lo, hi);
+    fcl::CollisionObjectd ok(km, tf), of(fm, tf), oc(cloth);
+    for (bool contact : {false, true}) {
+      fcl::CollisionRequestd req(std::numeric_limits<int>::max(), contact);
+      fcl::CollisionResultd rk, rf;
+      fcl::collide(&oc, &ok, req, rk);  // FCL's own collide on a kdet_fcl::Mesh
+      fcl::collide(&oc, &of, req, rf);
+      ASSERT_EQ(rk.numContacts(), rf.numContacts());
+      for (std::size_t c = 0; c < rk.numContacts(); ++c) {
+        EXPECT_EQ(rk.getContact(c).b1, rf.getContact(c).b1);
+        EXPECT_EQ(rk.getContact(c).b2, rf.getContact(c).b2);
+      }
+    }
+    // ... and kdet_fcl::collide gives the same set.
+    fcl::CollisionRequestd req(std::numeric_limits<int>::max(), false);
+    fcl::CollisionResultd rk;
+    kdet_fcl::collide(&oc, &ok, req, rk);
+    EXPECT_EQ(pairsOf(rk), fclPairs<double>(cloth.get(), fcl::Transform3d::Identity(), fm.get(), tf));
+  }
+  // Distance through FCL on the Mesh equals the plain model's.
+  fcl::Transform3d far = fcl::Transform3d::Identity();
+  far.translation() << 4, 0, 0;
+  fcl::DistanceRequestd dreq;
+  fcl::DistanceResultd d1, d2;
+  EXPECT_DOUBLE_EQ(fcl::distance(km.get(), far, cloth.get(), fcl::Transform3d::Identity(), dreq, d1),
+                   fcl::distance(fm.get(), far, cloth.get(), fcl::Transform3d::Identity(), dreq, d2));
+  // Inside an FCL manager.
+  fcl::CollisionObjectd ok(km), oc(cloth);
+  fcl::DynamicAABBTreeCollisionManagerd mgr;
+  mgr.registerObject(&ok);
+  mgr.registerObject(&oc);
+  fcl::DefaultCollisionData<double> dk, df;
+  dk.request.num_max_contacts = df.request.num_max_contacts = 100000;
+  mgr.collide(&dk, kdet_fcl::DefaultCollisionFunction<double>);
+  mgr.collide(&df, fcl::DefaultCollisionFunction<double>);
+  EXPECT_EQ(dk.result.numContacts(), df.result.numContacts());
+  EXPECT_GT(df.result.numContacts(), 0u);
+}
+
+TEST(FclMesh, UpdateAndReplaceAreNeverStale) {
+  Scene s;
+  auto km = makeModel<kdet_fcl::Meshd>(s.ball);
+  auto cloth = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(s.cloth);
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  auto check = [&](const char* what) {
+    // FCL's own collide on the Mesh (its BVH kept current) is the reference.
+    EXPECT_EQ(kdetPairs<double>(cloth.get(), I, km.get(), I), fclPairs<double>(cloth.get(), I, km.get(), I))
+        << what;
+  };
+  check("built");
+  const std::uint64_t v0 = km->version();
+  km->beginReplaceModel();
+  km->replaceSubModel(shifted(s.ball, 10));
+  EXPECT_EQ(km->endReplaceModel(), fcl::BVH_OK);
+  EXPECT_GT(km->version(), v0);
+  EXPECT_TRUE(kdetPairs<double>(cloth.get(), I, km.get(), I).empty());
+  check("replaced");
+  // replaceTriangle/replaceVertex (3 and 1 vertices each); FCL allows replace only before the
+  // first update (it needs BVH_BUILD_STATE_PROCESSED).
+  km->beginReplaceModel();
+  const auto ps = shifted(s.ball, 0.05);
+  for (std::size_t i = 0; i + 2 < ps.size(); i += 3) km->replaceTriangle(ps[i], ps[i + 1], ps[i + 2]);
+  for (std::size_t i = ps.size() / 3 * 3; i < ps.size(); ++i) km->replaceVertex(ps[i]);
+  EXPECT_EQ(km->endReplaceModel(), fcl::BVH_OK);
+  check("replaceTriangle");
+  for (double dz : {0.0, 0.2, 10.0, -0.1}) {
+    km->beginUpdateModel();
+    for (const auto& p : shifted(s.ball, dz)) km->updateVertex(p);
+    EXPECT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+    check("updated");
+  }
+  // An incomplete update is refused as FCL refuses it.
+  km->beginUpdateModel();
+  km->updateVertex(ps[0]);
+  EXPECT_EQ(km->endUpdateModel(), fcl::BVH_ERR_INCORRECT_DATA);
+  // Direct writes + notifyDeformed. (FCL's beginModel on a built model only clears it and
+  // returns an error; the second call begins.)
+  km->beginModel();
+  km->beginModel();
+  km->addSubModel(shifted(s.ball, 0), [&] {
+    std::vector<fcl::Triangle> ts;
+    for (const auto& t : s.ball.triangles) ts.emplace_back(t[0], t[1], t[2]);
+    return ts;
+  }());
+  EXPECT_EQ(km->endModel(), fcl::BVH_OK);
+  check("rebuilt");
+  for (int i = 0; i < km->num_vertices; ++i) km->vertices[i][2] += 20;
+  km->notifyDeformed();
+  EXPECT_TRUE(kdetPairs<double>(cloth.get(), I, km.get(), I).empty());
+  kdet_fcl::forget<double>(cloth.get());
+}
+
+TEST(FclMesh, KdetOnlyModeSkipsFclRefitAndStaysCorrectForKdet) {
+  Scene s;
+  auto km = std::make_shared<kdet_fcl::Meshd>(kdet_fcl::MeshMode::KdetOnly);
+  {
+    std::vector<fcl::Triangle> ts;
+    for (const auto& t : s.ball.triangles) ts.emplace_back(t[0], t[1], t[2]);
+    km->beginModel();
+    km->addSubModel(shifted(s.ball, 0), ts);
+    ASSERT_EQ(km->endModel(), fcl::BVH_OK);
+  }
+  auto ref = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(s.ball);
+  auto cloth = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(s.cloth);
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  EXPECT_TRUE(km->fclCurrent());
+  for (double dz : {0.1, 10.0, -0.2}) {
+    km->beginUpdateModel();
+    km->updateSubModel(shifted(s.ball, dz));
+    ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+    EXPECT_FALSE(km->fclCurrent());  // FCL's BVH was not refitted
+    ref->beginReplaceModel();
+    ref->replaceSubModel(shifted(s.ball, dz));
+    ref->endReplaceModel();
+    EXPECT_EQ(kdetPairs<double>(cloth.get(), I, km.get(), I), fclPairs<double>(cloth.get(), I, ref.get(), I));
+  }
+  // Forwarded pairs (mesh vs shape) refit on demand, so they stay right.
+  auto box = std::make_shared<fcl::Boxd>(0.2, 0.2, 0.2);
+  fcl::Transform3d tb = fcl::Transform3d::Identity();
+  tb.translation() << 0, 0, -1.2;  // touches the ball moved by -0.2
+  fcl::CollisionRequestd req(10, false);
+  fcl::CollisionResultd rk, rf;
+  kdet_fcl::collide(km.get(), I, box.get(), tb, req, rk);
+  EXPECT_TRUE(km->fclCurrent());
+  fcl::collide(ref.get(), I, box.get(), tb, req, rf);
+  EXPECT_EQ(rk.numContacts(), rf.numContacts());
+  EXPECT_GT(rk.numContacts(), 0u);
+  // refitFcl() / setMode(Fcl) bring FCL's BVH current for FCL's own collide.
+  km->beginUpdateModel();
+  km->updateSubModel(shifted(s.ball, 0.05));
+  ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+  EXPECT_FALSE(km->fclCurrent());
+  km->setMode(kdet_fcl::MeshMode::Fcl);
+  EXPECT_TRUE(km->fclCurrent());
+  ref->beginReplaceModel();
+  ref->replaceSubModel(shifted(s.ball, 0.05));
+  ref->endReplaceModel();
+  EXPECT_EQ(fclPairs<double>(cloth.get(), I, km.get(), I), fclPairs<double>(cloth.get(), I, ref.get(), I));
+  kdet_fcl::clearCache();
+}
+
+TEST(FclMesh, CopyFromModelFloatAndSelfCollide) {
+  Scene s;
+  auto obb = makeModel<fcl::BVHModel<fcl::OBBd>>(s.cloth);
+  auto km = kdet_fcl::Meshd::fromModel(*obb);
+  kdet_fcl::Meshd copy(*km);
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  fcl::CollisionRequestd req(std::numeric_limits<int>::max(), false);
+  fcl::CollisionResultd r1, r2, r3;
+  kdet_fcl::selfCollide(obb.get(), I, req, r1);
+  kdet_fcl::selfCollide(km.get(), I, req, r2);
+  kdet_fcl::selfCollide(&copy, I, req, r3);
+  EXPECT_GT(r1.numContacts(), 0u);
+  EXPECT_EQ(pairsOf(r1), pairsOf(r2));
+  EXPECT_EQ(pairsOf(r1), pairsOf(r3));
+  // float
+  const TriangleMesh<float> ball = kdet_fcl::makeSphere<float>({0, 0, 0}, 1.0f, 16, 8);
+  auto kf = makeModel<kdet_fcl::Meshf>(ball);
+  auto ff = makeModel<fcl::BVHModel<fcl::OBBRSSf>>(ball);
+  fcl::Transform3f tf = fcl::Transform3f::Identity();
+  tf.translation() << 0.5f, 0.1f, 0;
+  EXPECT_EQ(kdetPairs<float>(kf.get(), fcl::Transform3f::Identity(), ff.get(), tf),
+            fclPairs<float>(ff.get(), fcl::Transform3f::Identity(), ff.get(), tf));
+  kdet_fcl::clearCache();
+}
+
+TEST(FclMesh, NaNVerticesThrowOnQueryNotOnBuild) {
+  Scene s;
+  auto ps = shifted(s.ball, 0);
+  ps[5][1] = std::nan("");
+  std::vector<fcl::Triangle> ts;
+  for (const auto& t : s.ball.triangles) ts.emplace_back(t[0], t[1], t[2]);
+  kdet_fcl::Meshd m;
+  m.beginModel();
+  m.addSubModel(ps, ts);
+  EXPECT_EQ(m.endModel(), fcl::BVH_OK);  // FCL builds it
+  fcl::CollisionRequestd req;
+  fcl::CollisionResultd res;
+  EXPECT_THROW(kdet_fcl::collide<double>(&m, fcl::Transform3d::Identity(), &m,
+                                         fcl::Transform3d::Identity(), req, res),
+               kdet_fcl::InvalidInputError);
+}
