@@ -89,6 +89,10 @@ cmake_args=(
   -DKDET_FCL_CUDA_ARCHITECTURES=90
   # The packaged config files are from CMake 3.x; let a CMake 4 read them.
   -DCMAKE_POLICY_VERSION_MINIMUM=3.5
+  # Multiarch headers of the unpacked packages (gmp.h lives in include/<triplet>).
+  "-DCMAKE_CXX_FLAGS=-isystem $DEBS_ROOT/usr/include/$ARCH_TRIPLET"
+  # ... and their libraries for targets that link them by plain name (gmp, gmpxx).
+  "-DCMAKE_EXE_LINKER_FLAGS=-L$LIBDIR"
 )
 [[ -x /usr/local/cuda/bin/nvcc ]] && cmake_args+=(-DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc)
 # shellcheck disable=SC2206

@@ -212,3 +212,8 @@ TEST(TestUtil, RandomPoseIsARotation) {
   EXPECT_GE(T.t.x, 0);
   EXPECT_LE(T.t.x, 1);
 }
+
+TEST(LevelRule, Pow2IsExact) {
+  for (int e = -1022; e <= 1023; ++e) EXPECT_EQ(pow2(e), std::ldexp(1.0, e)) << e;
+  EXPECT_EQ(levelScale(3), 0.125);
+}

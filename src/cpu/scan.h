@@ -25,7 +25,7 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
     if (!h.levelOccupied(L)) continue;
     // Optionally grow the query box per level by grow_abs + grow_rel * (cell edge of level L):
     // a bound on rounding that depends on the size of the candidates stored on that level.
-    const double grow = grow_abs + grow_rel * h.grid.cell0 * std::ldexp(1.0, L);
+    const double grow = grow_abs + grow_rel * h.grid.cell0 * detail::pow2(L);
     const detail::Aabb<double> qbox = grow > 0 ? detail::inflate(qbox0, grow) : qbox0;
     const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, h.bounds);
     if (detail::isEmpty(clipped)) continue;
