@@ -1,14 +1,17 @@
 // The CUDA query backend (see cuda_backend.h for the contract).
 //
 // Per mesh (on a new version only): upload -> per-triangle box/diameter + grid reduction ->
-// grid (one thread, the CPU's formulas) -> level + cell count per triangle -> exclusive scan ->
-// [one host read-back: the grid and the entry count] -> (cell key, triangle) entries -> CUB radix
-// sort by cell key -> run heads -> cells + open-addressing table of full keys.
+// grid (one thread, the CPU's formulas) -> level + cell count per triangle -> triangles ordered
+// by decreasing diameter (32-bit radix sort) -> exclusive scan -> [one host read-back: the grid
+// and the entry count] -> (cell key, triangle) entries -> CUB radix sort by cell key (stable, so
+// each cell lists its triangles by decreasing diameter) -> run heads -> cells + open-addressing
+// table of full keys.
 // Per query: relative pose (host, as on the CPU) -> A's vertices mapped into B's frame ->
-// one thread per query triangle: candidates through its level and every coarser one, size rule,
-// box overlap, canonical cell, exact test -> pairs appended with warp-aggregated atomics ->
-// [host read-back of the count; on overflow grow and rerun] -> radix sort of the pairs ->
-// device->host copy.
+// phase 1, a tile of G lanes per query triangle: cells of its level and every coarser one, size
+// rule (with early exit), box overlap, canonical cell -> candidate pairs -> phase 2, one thread
+// per candidate: the exact test -> pairs appended with warp-aggregated atomics -> [host read-back
+// of both counts; on overflow grow and rerun] -> radix sort of the pairs -> device->host copy.
+// benchmarks/RESULTS-gpu.md has the measurements behind these choices.
 
 #include <cooperative_groups.h>
 #include <cuda_runtime_api.h>
@@ -348,13 +351,6 @@ __global__ void mapVerticesKernel(std::uint32_t n, const Vec3<S>* __restrict__ v
   if (i < n) out[i] = detail::mapPoint(a_to_b, v[i]);
 }
 
-template <class K, class S>
-__device__ __forceinline__ bool exactTest(const Vec3<S>* va, const std::uint32_t* ta,
-                                          std::uint32_t i, const Vec3<S>* vb,
-                                          const std::uint32_t* tb, std::uint32_t j) {
-  return detail::trianglesIntersectWith<K>(va[ta[3 * i]], va[ta[3 * i + 1]], va[ta[3 * i + 2]],
-                                           vb[tb[3 * j]], vb[tb[3 * j + 1]], vb[tb[3 * j + 2]]);
-}
 
 /// Phase 1 of an inter-object query: candidate pairs (i of A, j of B) that pass the size rule,
 /// the box test and the canonical-cell test, appended to `cand` as (i << 32) | j. Threads

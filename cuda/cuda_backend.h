@@ -15,6 +15,15 @@
 // computes all pairs and returns the first k of the sorted order (no early stop on the device).
 //
 // Thread safety: one mutex serialises all GPU queries of the process.
+//
+// Knobs (environment, for tests and tuning): KDET_FCL_CUDA_PAIR_CAPACITY=k caps the first pass's
+// candidate and pair buffers at k (forces the overflow path); KDET_FCL_CUDA_TILE=1|4|8|16|32
+// sets the lanes per query triangle of the candidate search (default 8, read once).
+//
+// Cache identity: an entry is reused when the HashedMesh address, version() and a fingerprint
+// (sizes, array addresses, 64 sampled vertices and triangles) all match. A new HashedMesh built
+// at a destroyed one's address with identical sizes and samples would be mistaken for it; making
+// version() unique per process (a global counter) would close that gap.
 
 #include <cstddef>
 #include <cstdint>

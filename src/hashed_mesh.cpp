@@ -1,5 +1,6 @@
 #include "kdet_fcl/hashed_mesh.h"
 
+#include <atomic>
 #include <cmath>
 #include <type_traits>
 #include <string>
@@ -89,7 +90,10 @@ void HashedMesh<S>::rehash(const std::vector<Vec3<S>>& vertices,
                            const std::vector<Triangle>& triangles) {
   spare_->build(vertices, triangles, threads_);
   std::swap(hash_, spare_);
-  ++version_;
+  // Versions are unique in the process, so a cache keyed by (address, version) can never mistake
+  // a new mesh at a freed mesh's address for the old one.
+  static std::atomic<std::uint64_t> next_version{1};
+  version_ = next_version.fetch_add(1);
 }
 
 template <class S>

@@ -64,7 +64,8 @@ class HashedMesh {
   const TriangleMesh<S>& mesh() const { return mesh_; }
   std::size_t numTriangles() const { return mesh_.triangles.size(); }
 
-  /// Incremented by every change of geometry (not by setPose).
+  /// Identifies the current geometry: a new value after every change of geometry (not after
+  /// setPose), unique within the process (no two meshes ever share one), and increasing.
   std::uint64_t version() const { return version_; }
 
   HierarchyStats stats() const;

@@ -72,6 +72,20 @@ set(configure_args
   "-DCMAKE_BUILD_TYPE=${CONFIG}"
   -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF
   -DCMAKE_FIND_PACKAGE_NO_PACKAGE_REGISTRY=ON)
+if(DEPS_PREFIX_PATH)
+  # The dependencies' own prefixes go through the environment (a ';' cannot live inside one
+  # argument of a CMake list); kdet_fcl itself is still found in ${prefix} only.
+  list(JOIN DEPS_PREFIX_PATH ":" deps)
+  set(ENV{CMAKE_PREFIX_PATH} "${deps}")
+endif()
+foreach(var IN ITEMS ccd_DIR octomap_DIR)
+  if(${var})
+    list(APPEND configure_args "-D${var}=${${var}}")
+  endif()
+endforeach()
+if(POLICY_VERSION_MINIMUM)
+  list(APPEND configure_args "-DCMAKE_POLICY_VERSION_MINIMUM=${POLICY_VERSION_MINIMUM}")
+endif()
 if(CMAKE_GENERATOR)
   list(APPEND configure_args -G "${CMAKE_GENERATOR}")
 endif()
