@@ -724,3 +724,37 @@ TEST(FclCollideBadInput, NaNVerticesAndPosesThrow) {
   EXPECT_EQ(res.numContacts(), 1u);
   kdet_fcl::clearCache();
 }
+
+// The backend reaches the FCL-facing entry points through setCollideOptions(): Cuda without a
+// device is a typed error; with a device the contacts equal the CPU's.
+TEST(FclCollideBackend, CudaBackendThroughCollideAndSelfCollide) {
+  const auto cloth = kdet_fcl::makeDrapedCloth<double>(40, 3.0, 1.0, 0.05, 1.0);
+  const auto sphere = kdet_fcl::makeSphere<double>({0, 0, 0}, 1.0, 24, 12);
+  auto mc = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(cloth);
+  auto ms = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(sphere);
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  const Pairs cpu = kdetPairs<double>(mc.get(), I, ms.get(), I);
+  ASSERT_FALSE(cpu.empty());
+  fcl::CollisionObjectd oc(mc, I);
+  const fcl::CollisionRequestd req(std::numeric_limits<int>::max(), false);
+  fcl::CollisionResultd cpu_self;
+  kdet_fcl::selfCollide(&oc, req, cpu_self);
+  ASSERT_GT(cpu_self.numContacts(), 0u);
+
+  const kdet_fcl::QueryOptions saved = kdet_fcl::collideOptions();
+  kdet_fcl::QueryOptions gpu = saved;
+  gpu.backend = kdet_fcl::Backend::Cuda;
+  kdet_fcl::setCollideOptions(gpu);
+  if (kdet_fcl::cudaDeviceCount() == 0) {
+    fcl::CollisionResultd r;
+    EXPECT_THROW(kdet_fcl::collide(mc.get(), I, ms.get(), I, req, r), kdet_fcl::BackendUnavailableError);
+    EXPECT_THROW(kdet_fcl::selfCollide(&oc, req, r), kdet_fcl::BackendUnavailableError);
+    EXPECT_EQ(r.numContacts(), 0u);  // nothing half-written
+  } else {
+    EXPECT_EQ(kdetPairs<double>(mc.get(), I, ms.get(), I), cpu);
+    fcl::CollisionResultd gpu_self;
+    kdet_fcl::selfCollide(&oc, req, gpu_self);
+    EXPECT_EQ(pairsOf(gpu_self), pairsOf(cpu_self));
+  }
+  kdet_fcl::setCollideOptions(saved);
+}
