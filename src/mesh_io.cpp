@@ -1068,6 +1068,27 @@ void appendUint(std::string& out, std::uint64_t v) {
   out.append(buf, r.ptr);
 }
 
+/// "x y z\n" with the shortest round-trip text of each coordinate.
+template <class S>
+void appendPoint(std::string& out, const Vec3<S>& v) {
+  appendNumber(out, v.x);
+  out += ' ';
+  appendNumber(out, v.y);
+  out += ' ';
+  appendNumber(out, v.z);
+  out += '\n';
+}
+
+/// "a b c\n" for a triangle's indices plus `base` (1 for OBJ, 0 for OFF).
+void appendTriangle(std::string& out, const Triangle& t, std::uint64_t base) {
+  appendUint(out, t[0] + base);
+  out += ' ';
+  appendUint(out, t[1] + base);
+  out += ' ';
+  appendUint(out, t[2] + base);
+  out += '\n';
+}
+
 class FileWriter {
  public:
   explicit FileWriter(const std::string& path)
@@ -1108,22 +1129,12 @@ void writeObj(const TriangleMesh<S>& mesh, FileWriter& w) {
   b += "# written by kdet_fcl\n";
   for (const auto& v : mesh.vertices) {
     b += "v ";
-    appendNumber(b, v.x);
-    b += ' ';
-    appendNumber(b, v.y);
-    b += ' ';
-    appendNumber(b, v.z);
-    b += '\n';
+    appendPoint(b, v);
     w.flushIfLarge();
   }
   for (const auto& t : mesh.triangles) {
     b += "f ";
-    appendUint(b, std::uint64_t(t[0]) + 1);
-    b += ' ';
-    appendUint(b, std::uint64_t(t[1]) + 1);
-    b += ' ';
-    appendUint(b, std::uint64_t(t[2]) + 1);
-    b += '\n';
+    appendTriangle(b, t, 1);
     w.flushIfLarge();
   }
 }
@@ -1137,22 +1148,12 @@ void writeOff(const TriangleMesh<S>& mesh, FileWriter& w) {
   appendUint(b, mesh.triangles.size());
   b += " 0\n";
   for (const auto& v : mesh.vertices) {
-    appendNumber(b, v.x);
-    b += ' ';
-    appendNumber(b, v.y);
-    b += ' ';
-    appendNumber(b, v.z);
-    b += '\n';
+    appendPoint(b, v);
     w.flushIfLarge();
   }
   for (const auto& t : mesh.triangles) {
     b += "3 ";
-    appendUint(b, t[0]);
-    b += ' ';
-    appendUint(b, t[1]);
-    b += ' ';
-    appendUint(b, t[2]);
-    b += '\n';
+    appendTriangle(b, t, 0);
     w.flushIfLarge();
   }
 }
