@@ -34,6 +34,9 @@ struct Scene {
   int min_height = 0;  ///< required HierarchyStats::height of a (size-ratio scenes)
   bool run_self = true;  ///< also run intersectSelf on the merged mesh (identity poses only)
   bool pair_query = true;  ///< run intersectMeshes(a, b) and (b, a)
+  /// Generic position (random coordinates, no constructed contacts or near-degeneracies): the
+  /// Double predicate must give the exact answer here.
+  bool generic = false;
 };
 
 using V3 = Vec3<double>;
@@ -350,6 +353,7 @@ template <class S>
 Scene<S> crumpled(int n, std::uint64_t seed) {
   Scene<S> s;
   s.name = "crumpled_cloth_" + std::to_string(n);
+  s.generic = true;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
   for (TriangleMesh<S>* m : {&s.a, &s.b}) {

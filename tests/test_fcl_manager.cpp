@@ -13,6 +13,7 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -530,6 +531,104 @@ TEST(FclManager, MixedSizesUnboundedAndIncremental) {
   EXPECT_EQ(ours.size(), kept.size());
   expectSelfMatchesBruteForce<double>(ours, kept, "after unregister");
   expectQueryMatchesBruteForce<double>(ours, kept, registered[0], "unregistered object as query");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Incremental changes: a few changed objects are tested directly (pending), many trigger one lazy
+// rebuild at the next query; both paths must give exactly the brute-force pairs.
+// ---------------------------------------------------------------------------------------------
+
+TEST(FclManager, PendingChangesAndLazyRebuild) {
+  std::mt19937 rng(36);
+  auto env = makeEnvironment<double>(rng, 150, 100, false);  // 300 objects
+  const auto query = makeEnvironment<double>(rng, 150, 10, false);
+  kdet_fcl::CollisionManagerd ours, ours_q;
+  ours.registerObjects(raw(env));
+  ours.setup();
+  ours_q.registerObjects(raw(query));
+  std::vector<Obj<double>*> live = raw(env);
+
+  auto check = [&](const char* what) {
+    expectSelfMatchesBruteForce<double>(ours, live, what);
+    for (const auto& q : query) expectQueryMatchesBruteForce<double>(ours, live, q.get(), what);
+    for (int j = 0; j < 5; ++j)
+      expectQueryMatchesBruteForce<double>(ours, live, live[(j * 53) % live.size()], what);
+    Recorder a, b;
+    ours.collide(&ours_q, &a, recordCallback<double>);
+    EXPECT_EQ(uniqueCalls(a.calls, false, what), bruteCrossPairs<double>(live, raw(query))) << what;
+    ours_q.collide(&ours, &b, recordCallback<double>);
+    EXPECT_EQ(uniqueCalls(b.calls, false, what), bruteCrossPairs<double>(raw(query), live)) << what;
+    const std::size_t total = bruteSelfPairs<double>(live).size();
+    for (std::size_t limit : {std::size_t(1), std::size_t(7)}) {
+      Stopper st{0, limit};
+      ours.collide(&st, stopCallback<double>);
+      EXPECT_EQ(st.calls, std::min(limit, total)) << what;
+    }
+  };
+  check("frozen");
+
+  // A few moved objects (below the rebuild threshold): tested as pending objects.
+  std::vector<Obj<double>*> few;
+  for (std::size_t i = 0; i < 6; ++i) few.push_back(live[i * 41]);
+  for (int round = 0; round < 3; ++round) {
+    perturb<double>(rng, few, 150.0);
+    for (Obj<double>* o : few) ours.update(o);
+    check("pending updates");
+  }
+
+  // Unregister a pending and a frozen object, register new ones (a freed slot is reused), one of
+  // them unbounded (a pending loose object), and a pending object again (a refresh).
+  for (Obj<double>* gone : std::vector<Obj<double>*>{few[0], live[7]}) {
+    ours.unregisterObject(gone);
+    live.erase(std::find(live.begin(), live.end(), gone));
+  }
+  env.emplace_back(new Obj<double>(std::make_shared<fcl::Box<double>>(40, 3, 3),
+                                   randomTransform<double>(rng, 100)));
+  env.emplace_back(new Obj<double>(
+      std::make_shared<fcl::Halfspace<double>>(fcl::Vector3d(0, 1, 0), 20.0)));
+  for (std::size_t i = env.size() - 2; i < env.size(); ++i) {
+    env[i]->computeAABB();
+    ours.registerObject(env[i].get());
+    live.push_back(env[i].get());
+  }
+  perturb<double>(rng, std::vector<Obj<double>*>{few[1]}, 150.0);
+  ours.registerObject(few[1]);
+  EXPECT_EQ(ours.size(), live.size());
+  check("pending registrations");
+
+  // Many moved objects one by one: the next query rebuilds once.
+  perturb<double>(rng, live, 150.0);
+  for (Obj<double>* o : live) ours.update(o);
+  check("lazy rebuild after update(obj)");
+
+  // update() re-reads everything; update(obj) afterwards must not lose the rebuild.
+  perturb<double>(rng, live, 150.0);
+  ours.update();
+  perturb<double>(rng, std::vector<Obj<double>*>{live[3]}, 150.0);
+  ours.update(live[3]);
+  check("update() then update(obj)");
+
+  // setup() flushes pending changes (the answers stay the same).
+  perturb<double>(rng, std::vector<Obj<double>*>{live[5], live[9]}, 150.0);
+  ours.update(live[5]);
+  ours.update(live[9]);
+  ours.setup();
+  check("after setup()");
+
+  // Parallel const queries right after a big change: the lazy rebuild happens once, under a lock.
+  perturb<double>(rng, live, 150.0);
+  ours.update(live);
+  const std::set<Pair> want = bruteSelfPairs<double>(live);
+  std::vector<std::set<Pair>> got(2);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 2; ++t)
+    threads.emplace_back([&, t] {
+      Recorder rec;
+      ours.collide(&rec, recordCallback<double>);
+      got[t] = std::set<Pair>(rec.calls.begin(), rec.calls.end());
+    });
+  for (auto& th : threads) th.join();
+  for (int t = 0; t < 2; ++t) EXPECT_EQ(got[t], want);
 }
 
 TEST(FclManager, FloatInstantiation) {

@@ -38,8 +38,10 @@
 ///   axis (O(n^2) at worst). Exact rather than fast.
 ///
 /// How it works (README "Broadphase: kdet_fcl::CollisionManager"): an object whose AABB has largest
-/// extent d lives on the finest level l with cell edge cell0 * 2^l >= d, so it covers at most 2
-/// cells per axis (8 cells) there; cell0 is the smallest positive extent. A pair is examined only
+/// extent d lives on the finest level l with cell edge cell0 * 2^l >= d / 2, so it covers at most 3
+/// cells per axis there; cell0 is the smallest positive extent. The hash (a flat open-addressing
+/// table, entries contiguous per cell) is a snapshot rebuilt lazily; objects changed since are
+/// tested directly. A pair is examined only
 /// in the cell holding the minimum corner of the overlap of the two boxes, on the coarser object's
 /// level: pairs of one level inside each cell, pairs of different levels by the finer object
 /// querying each coarser occupied level. So no de-duplication set is needed. Objects with
@@ -73,8 +75,9 @@ class CollisionManager : public fcl::BroadPhaseCollisionManager<S> {
   void setup() override;
   /// Re-reads every object's getAABB() and rebuilds the grid for them. O(n).
   void update() override;
-  /// Re-reads one object's getAABB() and re-inserts it (O(1) cells; the grid is rebuilt only
-  /// when the object leaves the grid's range or is under half the level-0 cell size).
+  /// Re-reads one object's getAABB(). O(1): the object leaves the hash snapshot and is tested
+  /// directly by queries until the next rebuild, which the first query after more than
+  /// 16 + n/64 such changes performs (O(n), once per burst of updates).
   void update(fcl::CollisionObject<S>* updated_obj) override;
   /// update(obj) for each object (one rebuild when most objects changed).
   void update(const std::vector<fcl::CollisionObject<S>*>& updated_objs) override;

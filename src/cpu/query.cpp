@@ -241,10 +241,14 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
           [&](std::uint32_t j) {
             if (sharesVertex(ui, j)) return true;
             ++st.triangle_tests;
-            if (!detail::trianglesIntersect(options.predicate, v[t[i][0]], v[t[i][1]], v[t[i][2]], v[t[j][0]],
-                                            v[t[j][1]], v[t[j][2]]))
+            // Lower index first: the plain (inexact) predicates are not symmetric, and this is
+            // the order bruteForceIntersectSelf uses.
+            const TrianglePair p = ui < j ? TrianglePair{ui, j} : TrianglePair{j, ui};
+            const Triangle &ta = t[p.a], &tb = t[p.b];
+            if (!detail::trianglesIntersect(options.predicate, v[ta[0]], v[ta[1]], v[ta[2]],
+                                            v[tb[0]], v[tb[1]], v[tb[2]]))
               return true;
-            out.push_back(ui < j ? TrianglePair{ui, j} : TrianglePair{j, ui});
+            out.push_back(p);
             return !(max_pairs > 0 && out.size() >= max_pairs);
           },
           st);
