@@ -24,21 +24,10 @@
 #include "test_util.h"
 
 using namespace kdet_fcl;
+using kdet_test::kSanitized;
 namespace fs = std::filesystem;
 
 namespace {
-
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
 
 template <class S>
 class BadInput : public ::testing::Test {};

@@ -12,6 +12,19 @@
 
 namespace kdet_test {
 
+/// Built with AddressSanitizer (some tests shrink or skip: shadow memory, RLIMIT_AS).
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+#else
+constexpr bool kSanitized = false;
+#endif
+
 /// Absolute path of a file in ../shared/data, or "" when the folder is absent (tests skip).
 inline std::string sharedData(const std::string& rel) {
   const std::filesystem::path p = std::filesystem::path(KDET_FCL_SHARED_DATA) / rel;
