@@ -142,6 +142,11 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
   const Aabb<double> a_in_b = rp.identity ? detail::inflate(ha.bounds, 0)
                                           : mappedBounds(ha.bounds, rp.a_to_b, scene_grow);
 
+  // Constant-time rejection of separated meshes (the common case of a rigid pair): no triangle of
+  // A can meet B if A's bounds miss B's grown bounds mapped into A's frame.
+  if (!detail::boxesOverlap(ha.bounds, b_in_a) || !detail::boxesOverlap(hb.bounds, a_in_b))
+    return QueryResult{};
+
   auto exact = [&](const Tri& a, std::uint32_t j) {
     return detail::trianglesIntersect(options.predicate, a.p[0], a.p[1], a.p[2], vb[tb[j][0]],
                                       vb[tb[j][1]], vb[tb[j][2]]);
