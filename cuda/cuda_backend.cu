@@ -358,8 +358,8 @@ __global__ void mapVerticesKernel(std::uint32_t n, const Vec3<S>* __restrict__ v
 /// mapped box). Threads [na, na + nb): B's triangle j against A's triangles with d_i > d_j (looked
 /// up in A's frame with B's box mapped back and grown by eps). The exact tests run in phase 2,
 /// one thread per candidate, so a warp does not serialise them behind its busiest thread.
-template <class S, int G>
-__global__ void __launch_bounds__(kQueryBlock)
+template <class S, int G, int MB>
+__global__ void __launch_bounds__(kQueryBlock, MB)
     interCandidatesKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
                           std::uint32_t na, std::uint32_t nb, bool identity,
                           Transform<double> b_to_a, double eps, PairSink cand) {
@@ -398,8 +398,8 @@ __global__ void __launch_bounds__(kQueryBlock)
 }
 
 /// Phase 1 of a self query: triangle i against the triangles j with (d_j, j) > (d_i, i).
-template <class S, int G>
-__global__ void __launch_bounds__(kQueryBlock)
+template <class S, int G, int MB>
+__global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesKernel(HashView<S> M, std::uint32_t n, PairSink cand) {
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
   const auto i = static_cast<std::uint32_t>(
@@ -1025,14 +1025,35 @@ int tileSize() {
   return t;
 }
 
+/// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
+/// KDET_FCL_CUDA_MINBLOCKS = 1 (no cap), 8 or 12 (default 12: at most 40 registers, about 3x the
+/// occupancy of the uncapped ~100-register kernel; measured 5-16% faster phase 1 despite the
+/// spills, benchmarks/RESULTS-gpu.md "Optimization round 2"). Read once.
+int minBlocksKnob() {
+  static const int mb = [] {
+    const char* e = std::getenv("KDET_FCL_CUDA_MINBLOCKS");
+    const int v = (e && *e) ? std::atoi(e) : 12;
+    return (v == 1 || v == 8 || v == 12) ? v : 12;
+  }();
+  return mb;
+}
+
+/// Calls f(G, MB) (integral constants) for the configured tile and register cap.
 template <class F>
 void withTile(F&& f) {
+  using std::integral_constant;
   switch (tileSize()) {
-    case 1: f(std::integral_constant<int, 1>{}); break;
-    case 4: f(std::integral_constant<int, 4>{}); break;
-    case 16: f(std::integral_constant<int, 16>{}); break;
-    case 32: f(std::integral_constant<int, 32>{}); break;
-    default: f(std::integral_constant<int, 8>{}); break;
+    case 1: f(integral_constant<int, 1>{}, integral_constant<int, 1>{}); break;
+    case 4: f(integral_constant<int, 4>{}, integral_constant<int, 1>{}); break;
+    case 16: f(integral_constant<int, 16>{}, integral_constant<int, 1>{}); break;
+    case 32: f(integral_constant<int, 32>{}, integral_constant<int, 1>{}); break;
+    default:
+      switch (minBlocksKnob()) {
+        case 1: f(integral_constant<int, 8>{}, integral_constant<int, 1>{}); break;
+        case 8: f(integral_constant<int, 8>{}, integral_constant<int, 8>{}); break;
+        default: f(integral_constant<int, 8>{}, integral_constant<int, 12>{}); break;
+      }
+      break;
   }
 }
 
@@ -1089,9 +1110,10 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const auto una = static_cast<std::uint32_t>(na), unb = static_cast<std::uint32_t>(nb);
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   auto launch = [&](PairSink cand, PairSink out) {
-    withTile([&](auto g) {
+    withTile([&](auto g, auto mb) {
       constexpr int G = decltype(g)::value;
-      interCandidatesKernel<S, G><<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
+      constexpr int MB = decltype(mb)::value;
+      interCandidatesKernel<S, G, MB><<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
           av, bv, va, una, unb, rp.identity, rp.b_to_a, eps, cand);
     });
     checkLaunch();
@@ -1118,9 +1140,10 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   const auto un = static_cast<std::uint32_t>(n);
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   auto launch = [&](PairSink cand, PairSink out) {
-    withTile([&](auto g) {
+    withTile([&](auto g, auto mb) {
       constexpr int G = decltype(g)::value;
-      selfCandidatesKernel<S, G><<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un,
+      constexpr int MB = decltype(mb)::value;
+      selfCandidatesKernel<S, G, MB><<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un,
                                                                                       cand);
     });
     checkLaunch();

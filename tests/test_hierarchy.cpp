@@ -64,7 +64,9 @@ TEST(Hierarchy, MemoryIsLinearInTheTriangleCount) {
   const double bs = double(small.stats().memory_bytes) / small.numTriangles();
   const double bl = double(large.stats().memory_bytes) / large.numTriangles();
   EXPECT_LT(bl, 1.5 * bs);
-  EXPECT_LT(bl, 400.0);
+  // The current hash, the spare a rebuild writes into, and the build scratch (kept so a deforming
+  // mesh rebuilds without allocating): a few hundred bytes per triangle, independent of n.
+  EXPECT_LT(bl, 512.0);
   EXPECT_LE(large.stats().entries, 8 * large.numTriangles());
 }
 

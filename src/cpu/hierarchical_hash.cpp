@@ -14,11 +14,15 @@ template <class S>
 void HierarchicalHash<S>::build(const std::vector<Vec3<S>>& vertices,
                                 const std::vector<Triangle>& triangles, int threads) {
   const std::size_t n = triangles.size();
-  boxes.assign(n, Aabb<double>{});
-  diameter.assign(n, 0.0);
-  level.assign(n, 0);
-  entries.clear();
-  slots_.clear();
+  // resize, not assign: every element is overwritten below, and a rebuild of a mesh of the same
+  // size (a deforming mesh) then touches no allocator and zeroes nothing.
+  boxes.resize(n);
+  diameter.resize(n);
+  level.resize(n);
+  if (n == 0) {
+    entries.clear();
+    slots_.clear();
+  }
   mask_ = 0;
   cells_ = 0;
   level_mask = 0;
@@ -65,7 +69,9 @@ void HierarchicalHash<S>::build(const std::vector<Vec3<S>>& vertices,
   grid.num_levels = top_level + 1;
 
   // Entries per triangle: the cells its box covers on its level (at most 8 up to rounding).
-  std::vector<std::uint64_t> offset(n + 1, 0);
+  std::vector<std::uint64_t>& offset = scratch_offset_;
+  offset.resize(n + 1);
+  offset[0] = 0;
   cpu::parallelFor(n, 8192, threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
       level[i] = std::uint8_t(levelFor(diameter[i], grid));
@@ -87,8 +93,10 @@ void HierarchicalHash<S>::build(const std::vector<Vec3<S>>& vertices,
   while (capacity < total + total / 4) capacity <<= 1;
   slots_.assign(capacity, Slot{{0, 0}, 0, 0});
   mask_ = capacity - 1;
-  std::vector<std::uint32_t> entry_slot(total);
-  std::vector<std::uint8_t> entry_mask(total);
+  std::vector<std::uint32_t>& entry_slot = scratch_slot_;
+  std::vector<std::uint8_t>& entry_mask = scratch_mask_;
+  entry_slot.resize(total);
+  entry_mask.resize(total);
   // Sequential insertion in triangle order: the table layout (and so every output order) is
   // independent of the thread count.
   for (std::size_t i = 0; i < n; ++i) {
@@ -118,12 +126,14 @@ void HierarchicalHash<S>::build(const std::vector<Vec3<S>>& vertices,
   entries.resize(total);
   // Fill cells in order of decreasing diameter (ties: increasing id), so every cell lists its
   // triangles largest first and a lookup can stop at the first triangle smaller than the query.
-  std::vector<std::uint32_t> order(n);
+  std::vector<std::uint32_t>& order = scratch_order_;
+  order.resize(n);
   for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
   std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
     return diameter[a] != diameter[b] ? diameter[a] > diameter[b] : a < b;
   });
-  std::vector<std::uint32_t> fill(capacity, 0);
+  std::vector<std::uint32_t>& fill = scratch_fill_;
+  fill.assign(capacity, 0);
   for (const std::uint32_t i : order)
     for (std::uint64_t k = offset[i]; k < offset[i + 1]; ++k) {
       const std::uint32_t s = entry_slot[k];
@@ -152,7 +162,11 @@ HierarchyStats HierarchicalHash<S>::stats() const {
 template <class S>
 std::size_t HierarchicalHash<S>::memoryBytes() const {
   return boxes.capacity() * sizeof(Aabb<double>) + diameter.capacity() * sizeof(double) +
-         level.capacity() + entries.capacity() * sizeof(Entry) + slots_.capacity() * sizeof(Slot);
+         level.capacity() + entries.capacity() * sizeof(Entry) + slots_.capacity() * sizeof(Slot) +
+         scratch_offset_.capacity() * sizeof(std::uint64_t) +
+         (scratch_slot_.capacity() + scratch_order_.capacity() + scratch_fill_.capacity()) *
+             sizeof(std::uint32_t) +
+         scratch_mask_.capacity();
 }
 
 template class HierarchicalHash<float>;

@@ -75,6 +75,10 @@ class HierarchicalHash {
 
  private:
   std::vector<Slot> slots_;
+  // Build scratch, kept so that rebuilding a deforming mesh reuses its memory.
+  std::vector<std::uint64_t> scratch_offset_;
+  std::vector<std::uint32_t> scratch_slot_, scratch_order_, scratch_fill_;
+  std::vector<std::uint8_t> scratch_mask_;
   std::uint64_t mask_ = 0;
   std::size_t cells_ = 0;
 };
