@@ -459,6 +459,32 @@ struct CollisionManager<S>::Impl {
 
   bool isValid(std::uint32_t s) const { return valid[s] != 0; }
 
+  /// Calls f(slot) for every valid entry on level l whose box overlaps q, seen only from the
+  /// canonical cell of the overlap (r: q's cell range on l). The canonical cell holds the
+  /// overlap's minimum corner; cell coordinates are monotone, so on each axis it is max(query's
+  /// first cell, entry's first cell): this cell iff on every axis it is the entry's first cell or
+  /// the query's. Stops and returns true when f does.
+  template <class F>
+  bool walkCanonical(const Aabb<double>& q, int l, const CellRange& r, bool check, F&& f) const {
+    for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
+      for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
+        for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
+          const Cell* c = findCell(detail::makeCellKey(l, x, y, z));
+          if (c == nullptr) continue;
+          const std::uint32_t need =
+              (x == r.lo[0] ? 0u : 1u) | (y == r.lo[1] ? 0u : 2u) | (z == r.lo[2] ? 0u : 4u);
+          const CellEntry* ce = entries.data() + c->begin;
+          for (std::uint32_t j = 0; j < c->count; ++j) {
+            const CellEntry& en = ce[j];
+            if ((en.lo_mask & need) != need) continue;
+            if (!detail::boxesOverlap(en.box, q)) continue;
+            if (check && !isValid(en.slot)) continue;
+            if (f(en.slot)) return true;
+          }
+        }
+    return false;
+  }
+
   /// Calls f(slot) once for every frozen, valid object whose box overlaps q (closed); stops and
   /// returns true when f does.
   template <class F>
@@ -482,25 +508,7 @@ struct CollisionManager<S>::Impl {
             continue;
           }
         }
-        for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
-          for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
-              const Cell* c = findCell(detail::makeCellKey(l, x, y, z));
-              if (c == nullptr) continue;
-              // The canonical cell holds the overlap's minimum corner; cell coordinates are
-              // monotone, so on each axis it is max(query's first cell, entry's first cell):
-              // this cell iff on every axis it is the entry's first cell or the query's.
-              const std::uint32_t need = (x == r.lo[0] ? 0u : 1u) | (y == r.lo[1] ? 0u : 2u) |
-                                         (z == r.lo[2] ? 0u : 4u);
-              const CellEntry* ce = entries.data() + c->begin;
-              for (std::uint32_t j = 0; j < c->count; ++j) {
-                const CellEntry& en = ce[j];
-                if ((en.lo_mask & need) != need) continue;
-                if (!detail::boxesOverlap(en.box, q)) continue;
-                if (check && !isValid(en.slot)) continue;
-                if (f(en.slot)) return true;
-              }
-            }
+        if (walkCanonical(q, l, r, check, f)) return true;
       }
     } else {
       for (const Member& m : members)
@@ -558,22 +566,10 @@ struct CollisionManager<S>::Impl {
       for (std::uint64_t lm = above; lm != 0; lm &= lm - 1) {
         const int l = __builtin_ctzll(lm);
         const CellRange r = detail::cellRange(A.box, l, grid);
-        for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
-          for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
-              const Cell* c = findCell(detail::makeCellKey(l, x, y, z));
-              if (c == nullptr) continue;
-              const std::uint32_t need = (x == r.lo[0] ? 0u : 1u) | (y == r.lo[1] ? 0u : 2u) |
-                                         (z == r.lo[2] ? 0u : 4u);
-              const CellEntry* ce = entries.data() + c->begin;
-              for (std::uint32_t j = 0; j < c->count; ++j) {
-                const CellEntry& B = ce[j];
-                if ((B.lo_mask & need) != need) continue;
-                if (!detail::boxesOverlap(A.box, B.box)) continue;
-                if (check && !isValid(B.slot)) continue;
-                if (reportSelf(A.slot, B.slot, cdata, callback)) return true;
-              }
-            }
+        if (walkCanonical(A.box, l, r, check, [&](std::uint32_t b) {
+              return reportSelf(A.slot, b, cdata, callback);
+            }))
+          return true;
       }
     }
     // Frozen loose objects against every frozen object; two loose ones once.
