@@ -2,7 +2,7 @@
 // (gpu_bvh.cu), the CPU backend and FCL 0.7, per frame, in one run.
 //
 //   gpu_bench [--data DIR] [--repeats N] [--only SUBSTR]... [--no-fcl] [--no-cpu] [--quick]
-//             [--csv FILE] [--json FILE] [--md FILE]
+//             [--big] [--csv FILE] [--json FILE] [--md FILE]
 //
 // DIR holds unc/{cloth-ball,cloth-funnel,n-body-simulation} (default: $KDET_FCL_DATA_DIR, else
 // ../shared/data beside the source tree); scenes whose files are missing are skipped.
@@ -12,7 +12,10 @@
 //     selfs), for the cloth ball (92/93), the funnel (227/228) and the n-body (18/19);
 //   - cloth over a sphere at 20k, 40k, 90k, 200k, 250k and 1M cloth triangles: 4 frames of
 //     makeDrapedCloth(n, 3, 1, 0.02, t), t = 0.3 .. 1 (the CPU suite's clothScene); the cloth
-//     deforms, the sphere is static; inter + both selfs.
+//     deforms, the sphere is static; inter + both selfs. --big adds a 10M-triangle cloth (2
+//     frames; kDet GPU and LBVH only: the CPU and FCL would take minutes per frame).
+// Device memory: cuda::deviceBytesInUse() after kDet GPU's first frame of a scene (one frame's
+// meshes resident, plus the backend's scratch), divided by the scene's triangles ("B/tri").
 // Per frame, each method does what a new frame costs it:
 //   - kDet GPU: markDeformed on the deforming meshes, then the queries (vertex upload, device
 //     re-hash, search, exact tests, sort, copy into std::vector);
@@ -77,6 +80,7 @@ struct BScene {
   std::vector<int> self;
   std::vector<std::pair<int, int>> inter;
   bool big_target = false;  // a deforming scene of >= 90k triangles (issue 5's GPU targets)
+  bool huge = false;        // --big: GPU methods only
   int frames() const {
     int f = 1;
     for (const Obj& o : objs) f = std::max(f, int(o.frames.size()));
@@ -103,6 +107,7 @@ struct Row {
   double bvh_ms = 0, bvh_wall = 0, bvh_rebuild_ms = 0, bvh_upload = 0, bvh_refit = 0,
          bvh_traverse = 0, bvh_exact = 0, bvh_out = 0, bvh_cands = 0;
   double cpu2_ms = std::nan(""), cpu16_ms = std::nan("");
+  double bytes_per_tri = std::nan("");  // kDet GPU device memory per triangle (one frame)
   double fcl_ms = std::nan(""), fcl_refit = std::nan("");
   std::string fcl_kind = "skipped";
   double fcl_pairs = 0, fcl_diff = 0;
@@ -186,7 +191,7 @@ Pairs selfFromPair(const TriangleMesh<float>& m, const Pairs& raw) {
 
 struct Config {
   int repeats = 10;
-  bool fcl = true, cpu = true, quick = false;
+  bool fcl = true, cpu = true, quick = false, big = false;
   std::vector<std::string> only;
 };
 
@@ -201,6 +206,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
   const int nobj = int(sc.objs.size());
   const int rounds = std::max(cfg.repeats, (30 + F - 1) / F);
   const bool large = r.triangles > 300000;
+  const bool do_cpu = cfg.cpu && !sc.huge, do_fcl = cfg.fcl && !sc.huge;
   std::fprintf(stderr, "[%s] %zu triangles, %d frame(s): preparing\n", sc.id.c_str(), r.triangles, F);
   cuda::releaseDeviceMemory();
 
@@ -279,9 +285,13 @@ Row runScene(const BScene& sc, const Config& cfg) {
     return n;
   };
 
+  // Device memory of one frame: the caches of frame 0's meshes plus the backend's scratch.
+  kdetGpuFrame(0, nullptr, nullptr);
+  r.bytes_per_tri = double(cuda::deviceBytesInUse()) / double(r.triangles);
+
   // ---- correctness pass (untimed): every frame, every method ----
   std::vector<std::unique_ptr<HashedMesh<float>>> cpu2, cpu16;
-  if (cfg.cpu) {
+  if (do_cpu) {
     cpu2 = makeCpu(2);
     cpu16 = makeCpu(16);
   }
@@ -304,7 +314,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
         }
     };
     cmp("LBVH", l);
-    if (cfg.cpu) {
+    if (do_cpu) {
       cpuFrame(cpu2, 2, f, &c2);
       cpuFrame(cpu16, 16, f, &c16);
       cmp("CPU 2T", c2);
@@ -393,7 +403,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
   bv.clear();
 
   // ---- kDet CPU ----
-  if (cfg.cpu) {
+  if (do_cpu) {
     const int cpu_rounds = large ? 1 : 3;
     for (int threads : {2, 16}) {
       std::fprintf(stderr, "[%s] kDet CPU %d threads\n", sc.id.c_str(), threads);
@@ -411,7 +421,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
 
   // ---- FCL OBBRSS ----
   const bool self_pair = sc.inter.empty();
-  if (cfg.fcl && !(self_pair && large)) {
+  if (do_fcl && !(self_pair && large)) {
     std::fprintf(stderr, "[%s] FCL OBBRSS (%s)\n", sc.id.c_str(), self_pair ? "self-pair" : "inter");
     r.fcl_kind = self_pair ? "self-pair" : "inter";
     std::vector<std::shared_ptr<FclModel>> fm(nobj);
@@ -521,8 +531,10 @@ std::vector<BScene> makeScenes(const std::string& data, const Config& cfg) {
   std::vector<std::pair<int, std::size_t>> sweep = {{100, 20000},  {141, 40000},  {212, 90000},
                                                     {316, 200000}, {354, 250000}, {707, 1000000}};
   if (cfg.quick) sweep = {{32, 2000}, {45, 4000}};
-  const int F = cfg.quick ? 2 : 4;
+  if (cfg.big) sweep.push_back({2236, 10000000});
   for (auto [n, nominal] : sweep) {
+    const bool huge = nominal > 1000000;
+    const int F = cfg.quick || huge ? 2 : 4;
     const std::string id = "cloth-" + std::to_string(nominal / 1000) + "k";
     if (!wanted(id)) continue;
     BScene s;
@@ -539,6 +551,7 @@ std::vector<BScene> makeScenes(const std::string& data, const Config& cfg) {
     s.self = {0, 1};
     s.inter = {{0, 1}};
     s.big_target = nominal >= 90000;
+    s.huge = huge;
     out.push_back(std::move(s));
   }
   return out;
@@ -564,8 +577,8 @@ std::string markdown(const std::vector<Row>& rows, const std::string& device) {
   std::string md;
   md += "Device: " + device + "\n\n";
   md += "| scene | triangles | kDet GPU ms | LBVH GPU ms | kDet vs LBVH | FCL OBBRSS ms | kDet vs FCL "
-        "| kDet CPU 2T ms | kDet CPU 16T ms | pairs | agree |\n";
-  md += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+        "| kDet CPU 2T ms | kDet CPU 16T ms | pairs | agree | kDet GPU B/tri |\n";
+  md += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|\n";
   for (const Row& r : rows) {
     const std::string fcl = r.fcl_kind == "skipped" ? "skipped"
                             : fmt(r.fcl_ms, 1) + (r.fcl_kind == "self-pair" ? " †" : "");
@@ -573,7 +586,7 @@ std::string markdown(const std::vector<Row>& rows, const std::string& device) {
           " | " + fmt(r.bvh_ms) + " | " + ratio(r.bvh_ms, r.kdet_ms) + " | " + fcl + " | " +
           (r.fcl_kind == "skipped" ? "n/a" : ratio(r.fcl_ms, r.kdet_ms)) + " | " +
           fmt(r.cpu2_ms, 2) + " | " + fmt(r.cpu16_ms, 2) + " | " + thousands(r.pairs) + " | " +
-          (r.agree ? "yes" : "**NO**") + " |\n";
+          (r.agree ? "yes" : "**NO**") + " | " + fmt(r.bytes_per_tri, 0) + " |\n";
   }
   md += "\nBreakdown (medians per frame, ms; device events):\n\n";
   md += "| scene | kDet build | kDet query (cand) | kDet out | kDet cands | kDet wall | LBVH upload | "
@@ -614,13 +627,14 @@ int main(int argc, char** argv) {
     else if (a == "--no-fcl") cfg.fcl = false;
     else if (a == "--no-cpu") cfg.cpu = false;
     else if (a == "--quick") cfg.quick = true;
+    else if (a == "--big") cfg.big = true;
     else if (a == "--csv" && i + 1 < argc) csv = argv[++i];
     else if (a == "--json" && i + 1 < argc) json = argv[++i];
     else if (a == "--md" && i + 1 < argc) mdfile = argv[++i];
     else {
       std::fprintf(stderr,
                    "usage: gpu_bench [--data DIR] [--repeats N] [--only SUBSTR]... [--no-fcl] "
-                   "[--no-cpu] [--quick] [--csv FILE] [--json FILE] [--md FILE]\n");
+                   "[--no-cpu] [--quick] [--big] [--csv FILE] [--json FILE] [--md FILE]\n");
       return 2;
     }
   }
@@ -650,10 +664,10 @@ int main(int argc, char** argv) {
     }
     std::printf(
         "%-22s tris=%9zu pairs=%10.0f kDet GPU %8.3f ms (wall %8.3f) | LBVH %8.3f ms (wall %8.3f, "
-        "rebuild %8.3f) | x%.2f | CPU2 %9.2f CPU16 %8.2f | FCL(%s) %9.1f | %s\n",
+        "rebuild %8.3f) | x%.2f | CPU2 %9.2f CPU16 %8.2f | FCL(%s) %9.1f | %.0f B/tri | %s\n",
         r.id.c_str(), r.triangles, r.pairs, r.kdet_ms, r.kdet_wall, r.bvh_ms, r.bvh_wall,
         r.bvh_rebuild_ms, r.bvh_ms / r.kdet_ms, r.cpu2_ms, r.cpu16_ms, r.fcl_kind.c_str(),
-        r.fcl_ms, r.agree ? "agree" : "DISAGREEMENT");
+        r.fcl_ms, r.bytes_per_tri, r.agree ? "agree" : "DISAGREEMENT");
     if (!r.agree) {
       std::printf("\n!!!!!!!! DISAGREEMENT in %s: %s\n\n", r.id.c_str(), r.disagreement.c_str());
       ok = false;
@@ -671,7 +685,7 @@ int main(int argc, char** argv) {
            "kdet_query_ms,kdet_candidates_ms,kdet_output_ms,kdet_candidates,lbvh_ms,lbvh_wall_ms,"
            "lbvh_rebuild_ms,lbvh_upload_ms,lbvh_refit_ms,lbvh_traverse_ms,lbvh_exact_ms,"
            "lbvh_output_ms,lbvh_candidates,cpu2_ms,cpu16_ms,fcl_kind,fcl_ms,fcl_refit_ms,"
-           "fcl_pairs,fcl_diff,agree\n";
+           "fcl_pairs,fcl_diff,agree,kdet_bytes_per_triangle\n";
     for (const Row& r : rows)
       out << r.id << ",\"" << r.label << "\"," << r.triangles << ',' << r.frames << ',' << r.pairs
           << ',' << r.kdet_ms << ',' << r.kdet_wall << ',' << r.kdet_build << ',' << r.kdet_query
@@ -680,7 +694,7 @@ int main(int argc, char** argv) {
           << ',' << r.bvh_refit << ',' << r.bvh_traverse << ',' << r.bvh_exact << ','
           << r.bvh_out << ',' << r.bvh_cands << ',' << r.cpu2_ms << ',' << r.cpu16_ms << ','
           << r.fcl_kind << ',' << r.fcl_ms << ',' << r.fcl_refit << ',' << r.fcl_pairs << ','
-          << r.fcl_diff << ',' << r.agree << '\n';
+          << r.fcl_diff << ',' << r.agree << ',' << r.bytes_per_tri << '\n';
   }
   if (!json.empty()) {
     std::ofstream out(json);
@@ -705,6 +719,7 @@ int main(int argc, char** argv) {
           << ", \"cpu16_ms\": " << num(r.cpu16_ms) << ", \"fcl_kind\": \"" << r.fcl_kind
           << "\", \"fcl_ms\": " << num(r.fcl_ms) << ", \"fcl_pairs\": " << num(r.fcl_pairs)
           << ", \"fcl_diff\": " << num(r.fcl_diff)
+          << ", \"kdet_bytes_per_triangle\": " << num(r.bytes_per_tri)
           << ", \"agree\": " << (r.agree ? "true" : "false") << "}"
           << (i + 1 < rows.size() ? "," : "") << "\n";
     }

@@ -156,6 +156,7 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
         kb::Mesh copy = *fr.meshes[o];  // untimed: the constructor takes the mesh by value
         const auto t0 = Clock::now();
         obj[o] = std::make_unique<HashedMesh<double>>(std::move(copy), fr.poses[o], threads);
+        if (backend != kdet_fcl::Backend::Cuda) obj[o]->prepareCpuHash();
         rec.update_ms += msSince(t0);
         continue;
       }
@@ -171,6 +172,7 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
           if (fr.meshes[o] == s.frames[f - 1].meshes[o]) break;
           const auto t0 = Clock::now();
           obj[o]->updateVertices(fr.meshes[o]->vertices);
+          if (backend != kdet_fcl::Backend::Cuda) obj[o]->prepareCpuHash();
           rec.update_ms += msSince(t0);
           break;
         }
@@ -178,6 +180,7 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
           kb::Mesh copy = *fr.meshes[o];
           const auto t0 = Clock::now();
           obj[o]->setMesh(std::move(copy));
+          if (backend != kdet_fcl::Backend::Cuda) obj[o]->prepareCpuHash();
           rec.update_ms += msSince(t0);
           break;
         }

@@ -1,5 +1,12 @@
-// manager_bench: kdet_fcl::CollisionManager against FCL 0.7's DynamicAABBTreeCollisionManager and
-// (for small scenes) NaiveCollisionManager, same scenes, same process, median of repeated runs.
+// manager_bench: kdet_fcl::CollisionManager against FCL 0.7's DynamicAABBTreeCollisionManager,
+// SpatialHashingCollisionManager and (for small scenes) NaiveCollisionManager, same scenes, same
+// process, median of repeated runs.
+//
+// FCL's spatial hash calls back for every object sharing a cell, with no AABB test (fcl-notes
+// section 2), so the counting callback tests AABB overlap itself for every manager: the counts are
+// then the overlapping pairs whatever the manager, and are cross-checked. Its grid follows FCL's
+// own broadphase tests: cell = min extent of computeBound(env) / 20, over that bound, with the
+// unordered_map table (SparseHashTable; the default SimpleHashTable aliases keys mod 1000).
 //
 // Scenes (axis-aligned fcl::Box objects, so the stored AABB is the box):
 //   mixed   n boxes with edges log-uniform over two orders of magnitude, uniform in a cube sized
@@ -32,6 +39,9 @@
 
 #include <fcl/broadphase/broadphase_bruteforce.h>
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/broadphase/broadphase_spatialhash.h>
+#include <fcl/broadphase/detail/sparse_hash_table.h>
+#include <fcl/broadphase/detail/spatial_hash.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/sphere.h>
@@ -59,9 +69,21 @@ struct Counter {
   std::size_t pairs = 0;
 };
 
-bool countCallback(Obj*, Obj*, void* data) {
-  ++static_cast<Counter*>(data)->pairs;
+bool countCallback(Obj* a, Obj* b, void* data) {
+  if (a->getAABB().overlap(b->getAABB())) ++static_cast<Counter*>(data)->pairs;
   return false;
+}
+
+using SpatialHashManager = fcl::SpatialHashingCollisionManager<
+    double, fcl::detail::SparseHashTable<fcl::AABBd, Obj*, fcl::detail::SpatialHash<double>>>;
+
+/// FCL's spatial hash set up as its own broadphase tests do (see the header comment).
+std::unique_ptr<Manager> makeSpatialHash(const std::vector<Obj*>& env) {
+  std::vector<Obj*> objs = env;
+  fcl::Vector3d lo, hi;
+  SpatialHashManager::computeBound(objs, lo, hi);
+  const double cell = std::max((hi - lo).minCoeff() / 20, 1e-9);
+  return std::make_unique<SpatialHashManager>(cell, lo, hi);
 }
 
 ObjPtr axisBox(double ex, double ey, double ez, const fcl::Vector3d& center) {
@@ -185,6 +207,8 @@ void moveObjects(const std::vector<Obj*>& objs, std::size_t stride, double step,
 }
 
 Row measure(const Scene& sc, const std::string& name, const Factory& make, int reps) {
+  std::fprintf(stderr, "manager_bench: %s n=%zu %s ...\n", sc.name.c_str(), sc.env.size(),
+               name.c_str());
   Row row;
   row.scene = sc.name;
   row.manager = name;
@@ -272,7 +296,7 @@ int main(int argc, char** argv) {
     } else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) {
       reps = std::max(1, std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) {
-      only = argv[++i];  // kdet, dyn-tree or naive (profiling; skips the cross-check)
+      only = argv[++i];  // kdet, dyn-tree or spatial-hash (profiling; skips the cross-check)
     } else if (!std::strcmp(argv[i], "--scene") && i + 1 < argc) {
       which = argv[++i];
     } else {
@@ -288,6 +312,8 @@ int main(int argc, char** argv) {
     if (which == "all" || which == "sparse") scenes.push_back(sparseScene(n, 2));
     if (which == "all" || which == "fcl") scenes.push_back(fclScene(n, 3));
     for (const Scene& sc : scenes) {
+      const std::vector<Obj*> env = raw(sc.env);
+      const Factory spatial = [env] { return makeSpatialHash(env); };
       if (!only.empty()) {
         if (only == "kdet")
           rows.push_back(measure(
@@ -296,6 +322,7 @@ int main(int argc, char** argv) {
           rows.push_back(measure(
               sc, "dyn-tree",
               [] { return std::make_unique<fcl::DynamicAABBTreeCollisionManagerd>(); }, reps));
+        if (only == "spatial-hash") rows.push_back(measure(sc, "spatial-hash", spatial, reps));
         continue;
       }
       rows.push_back(measure(sc, "kdet", [] { return std::make_unique<kdet_fcl::CollisionManagerd>(); },
@@ -303,6 +330,7 @@ int main(int argc, char** argv) {
       rows.push_back(measure(
           sc, "dyn-tree", [] { return std::make_unique<fcl::DynamicAABBTreeCollisionManagerd>(); },
           reps));
+      rows.push_back(measure(sc, "spatial-hash", spatial, reps));
       if (n <= 2000)
         rows.push_back(measure(
             sc, "naive", [] { return std::make_unique<fcl::NaiveCollisionManagerd>(); }, reps));
@@ -324,14 +352,14 @@ int main(int argc, char** argv) {
     std::printf("| %s | %zu | %s | %zu | %.2f | %.2f | %.2f | %.2f | %.3f | %.2f | %.2f | %.2f |\n",
                 r.scene.c_str(), r.n, r.manager.c_str(), r.self_pairs, r.build, r.self, r.query,
                 r.mgr, r.upd1, r.upd1_self, r.upd_all, r.upd_all_self);
-    const Row& ref = rows[&r - rows.data() - (r.manager == "kdet" ? 0 : r.manager == "dyn-tree" ? 1 : 2)];
-    // NaiveCollisionManager::collide(obj) hands every object to the callback (no AABB test).
-    const bool naive = r.manager == "naive";
-    if (r.self_pairs != ref.self_pairs || (!naive && r.query_pairs != ref.query_pairs) ||
-        r.mgr_pairs != ref.mgr_pairs) {
+    // The reference is the kdet row of the same scene and size (measured first).
+    const Row* ref = &r;
+    while (ref > rows.data() && ref->manager != "kdet") --ref;
+    if (r.self_pairs != ref->self_pairs || r.query_pairs != ref->query_pairs ||
+        r.mgr_pairs != ref->mgr_pairs) {
       std::printf("  ^ disagrees with %s: self %zu/%zu, query %zu/%zu, mgr %zu/%zu\n",
-                  ref.manager.c_str(), r.self_pairs, ref.self_pairs, r.query_pairs,
-                  ref.query_pairs, r.mgr_pairs, ref.mgr_pairs);
+                  ref->manager.c_str(), r.self_pairs, ref->self_pairs, r.query_pairs,
+                  ref->query_pairs, r.mgr_pairs, ref->mgr_pairs);
       mismatch = true;
     }
   }

@@ -1,16 +1,26 @@
 // The CUDA query backend (see cuda_backend.h for the contract).
 //
 // Per mesh (on a new version only): upload -> per-triangle box/diameter + grid reduction ->
-// grid (one thread, the CPU's formulas) -> level + cell count per triangle -> triangles ordered
-// by decreasing diameter (32-bit radix sort) -> exclusive scan -> [one host read-back: the grid
-// and the entry count] -> (cell key, triangle) entries -> CUB radix sort by cell key (stable, so
-// each cell lists its triangles by decreasing diameter) -> run heads -> cells + open-addressing
-// table of full keys.
+// grid (one thread, the CPU's formulas, into the mesh's device BuildInfo) -> level + cell count
+// per triangle -> triangles ordered by decreasing diameter (32-bit radix sort) -> exclusive scan
+// -> [first build only: read back the grid and the entry count] -> (cell key, triangle) entries
+// (compact 64-bit keys where exact, else 128-bit) -> CUB radix sort by cell key over the entry
+// capacity (stable, so each cell lists its triangles by decreasing diameter; padding sorts last)
+// -> run heads -> scan -> [first build only: read back the cell count] -> cells (one key per
+// cell) + open-addressing table sized by cells. A re-hash reads nothing back (rebuild()).
 // Per query: relative pose (host, as on the CPU) -> A's vertices mapped into B's frame ->
 // phase 1, a tile of G lanes per query triangle: cells of its level and every coarser one, size
-// rule (with early exit), box overlap, canonical cell -> candidate pairs -> phase 2, one thread
-// per candidate: the exact test -> pairs appended with warp-aggregated atomics -> [host read-back
-// of both counts; on overflow grow and rerun] -> radix sort of the pairs -> device->host copy.
+// rule (with early exit), box overlap, canonical cell -> candidate pairs -> plane filter (Exact
+// predicate only; one thread per candidate, drops pairs that the exact test's first rejection
+// provably rejects, keeps the rest) -> phase 2, one thread per surviving candidate: the exact
+// test -> pairs appended with warp-aggregated atomics -> [host read-back of the counts, and of
+// the BuildInfo of meshes re-hashed in this query; on overflow grow and rerun, on a re-hash that
+// did not fit rebuild it with read-backs and rerun] -> radix sort of the pairs -> device->host
+// copy. The meshes' grids reach the candidate kernel through constant memory (c_info), copied
+// device to device, so the host never needs a re-hash's grid.
+// Memory: the build's sort and count scratch is carved out of the query buffers (candidates,
+// pairs, sorted pairs), which are idle during a build; the filter's survivors use the sorted-pair
+// buffer, idle until the final sort.
 // benchmarks/RESULTS-gpu.md has the measurements behind these choices.
 
 #include <cooperative_groups.h>
@@ -53,6 +63,7 @@ using detail::GridParams;
 
 constexpr int kBuildBlock = 256;
 constexpr int kQueryBlock = 128;
+constexpr int kFilterBlock = 256;
 constexpr std::size_t kMaxCachedMeshes = 32;
 
 // ---------------------------------------------------------------------------------------------
@@ -132,8 +143,11 @@ __global__ void __launch_bounds__(kBuildBlock)
   }
 }
 
-/// The grid, with the CPU's formulas (HierarchicalHash::build), in one thread.
-__global__ void gridKernel(const BuildReduce* red, BuildInfo* info) {
+/// The grid, with the CPU's formulas (HierarchicalHash::build), in one thread. Resets the
+/// reduction targets for the next build (no memsets per build). `async_key_bits` > 0: a re-hash
+/// without read-back whose compact keys are sorted on that many bits; need_sync is set when the
+/// new grid's keys do not fit (the host then rebuilds with read-backs).
+__global__ void gridKernel(BuildReduce* red, BuildInfo* info, int async_key_bits) {
   if (blockIdx.x != 0 || threadIdx.x != 0) return;
   BuildInfo in;
   for (int a = 0; a < 3; ++a) {
@@ -166,7 +180,15 @@ __global__ void gridKernel(const BuildReduce* red, BuildInfo* info) {
   in.level_bits = in.top_level > 0 ? 32 - __clz(in.top_level) : 1;
   in.fits64 = in.level_bits + 3 * in.coord_bits <= 64;
   in.level_mask = 0;
+  in.entries = 0;
+  in.cells = 0;
+  in.need_sync = async_key_bits > 0 &&
+                 (!in.fits64 || in.level_bits + 3 * in.coord_bits > async_key_bits);
+  in.pad_ = 0;
   *info = in;
+  for (int a = 0; a < 3; ++a) red->lo[a] = ~0ull, red->hi[a] = 0;
+  red->dmin_pos = ~0ull;
+  red->dmax = 0;
 }
 
 /// The high 32 bits of a diameter's ordered bit pattern: monotone in the diameter, so entries
@@ -204,27 +226,24 @@ __global__ void __launch_bounds__(kBuildBlock)
   if (threadIdx.x == 0 && mask != 0) atomicOr(&info->level_mask, mask);
 }
 
-__device__ __forceinline__ unsigned long long compactKey(int level, std::int64_t x, std::int64_t y,
-                                                         std::int64_t z, int cb) {
-  return (static_cast<unsigned long long>(level) << (3 * cb)) |
-         (static_cast<unsigned long long>(x) << (2 * cb)) |
-         (static_cast<unsigned long long>(y) << cb) | static_cast<unsigned long long>(z);
-}
-
 /// (cell, triangle) entries. kCompact: key = compact 64-bit key (exact, bijective), value =
 /// triangle. Otherwise: key = low word of the 128-bit key, hi[] = high word, value = entry index,
-/// tri_of[entry] = triangle (sorted in two stable passes).
+/// tri_of[entry] = triangle (sorted in two stable passes). Entries at or past `cap` are counted
+/// (info->entries = offsets[n]) but not written; the unwritten keys keep their padding (all
+/// ones), so they sort after every real key. Nothing is written when info->need_sync.
 template <class S, bool kCompact>
 __global__ void __launch_bounds__(kBuildBlock)
     fillKernel(std::uint32_t n, const Aabb<S>* __restrict__ box,
                const std::uint8_t* __restrict__ level, const std::uint32_t* __restrict__ offsets,
                const std::uint32_t* __restrict__ by_size, const BuildInfo* info,
                unsigned long long* __restrict__ keys, unsigned long long* __restrict__ hi,
-               std::uint32_t* __restrict__ vals, std::uint32_t* __restrict__ tri_of) {
+               std::uint32_t* __restrict__ vals, std::uint32_t* __restrict__ tri_of,
+               std::uint32_t cap, BuildInfo* winfo) {
   // Triangles are laid out by decreasing diameter (rank r holds triangle by_size[r]); the stable
   // sort by cell key keeps that order inside each cell.
   const std::uint32_t rank = blockIdx.x * blockDim.x + threadIdx.x;
-  if (rank >= n) return;
+  if (rank == 0) winfo->entries = offsets[n];
+  if (rank >= n || info->need_sync) return;
   const std::uint32_t i = by_size[rank];
   const GridParams g = info->grid;
   const int cb = info->coord_bits;
@@ -237,6 +256,7 @@ __global__ void __launch_bounds__(kBuildBlock)
   for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
     for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
       for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z, ++e) {
+        if (e >= cap) return;
         if (kCompact) {
           keys[e] = compactKey(l, x, y, z, cb);
           vals[e] = i;
@@ -273,32 +293,60 @@ __global__ void gatherTrisKernel(std::uint32_t m, const std::uint32_t* __restric
   if (k < m) dst[k] = tri_of[perm[k]];
 }
 
-/// head[k] = 1 where a new cell starts in the sorted entries (full-key comparison).
+/// The entries of this build that were written: min(entries, cap), or none after need_sync.
+__device__ __forceinline__ std::uint32_t writtenEntries(const BuildInfo* info, std::uint32_t cap) {
+  if (info->need_sync) return 0;
+  const std::uint32_t e = info->entries;
+  return e < cap ? e : cap;
+}
+
+/// head[k] = 1 where a new cell starts in the sorted entries (full-key comparison), 0 past the
+/// written entries (the scan runs over the whole capacity, whose size the host knows). When
+/// `slots` is given (a re-hash: the table keeps its size), also empties the table (grid-stride),
+/// in place of a memset.
 template <bool kCompact>
-__global__ void headsKernel(std::uint32_t m, const unsigned long long* __restrict__ key,
+__global__ void headsKernel(std::uint32_t cap, const BuildInfo* info,
+                            const unsigned long long* __restrict__ key,
                             const unsigned long long* __restrict__ hi,
-                            std::uint32_t* __restrict__ head) {
+                            std::uint32_t* __restrict__ head, unsigned long long* slots,
+                            std::uint32_t slot_count) {
   const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-  if (k >= m) return;
+  if (slots != nullptr)
+    for (std::uint32_t i = k; i < slot_count; i += gridDim.x * blockDim.x) slots[i] = kEmptySlot;
+  if (k >= cap) return;
+  const std::uint32_t m = writtenEntries(info, cap);
+  if (k >= m) {
+    head[k] = 0;
+    return;
+  }
   bool h = k == 0 || key[k] != key[k - 1];
   if (!kCompact && k > 0) h = h || hi[k] != hi[k - 1];
   head[k] = h ? 1u : 0u;
 }
 
-/// One thread per run head: the cell's first entry, its full key, and its slot in the table.
+/// One thread per run head: the cell's first entry, its full key (1 word when compact, else
+/// {hi, lo}), and its slot in the table. Cells at or past `cell_cap` are counted
+/// (info->cells) but not stored, so the host can see that the arrays were too small.
 template <bool kCompact>
-__global__ void cellsKernel(std::uint32_t m, const unsigned long long* __restrict__ key,
+__global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restrict__ key,
                             const unsigned long long* __restrict__ hi,
                             const std::uint32_t* __restrict__ head,
-                            const std::uint32_t* __restrict__ cell_index, const BuildInfo* info,
-                            std::uint32_t* __restrict__ cell_begin, CellKey* __restrict__ cell_key,
-                            unsigned long long* slots, unsigned long long slot_mask) {
+                            const std::uint32_t* __restrict__ cell_index, BuildInfo* info,
+                            std::uint32_t cell_cap, std::uint32_t* __restrict__ cell_begin,
+                            unsigned long long* __restrict__ cell_key, unsigned long long* slots,
+                            std::uint32_t slot_count) {
   const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  const std::uint32_t m = writtenEntries(info, cap);
   if (k >= m) return;
-  if (k == m - 1) cell_begin[cell_index[k] + head[k]] = m;  // sentinel after the last cell
+  if (k == m - 1) {  // sentinel after the last cell
+    const std::uint32_t cells = cell_index[k] + head[k];
+    info->cells = cells;
+    if (cells <= cell_cap) cell_begin[cells] = m;
+  }
   if (!head[k]) return;
   const std::uint32_t c = cell_index[k];
-  cell_begin[c] = k;
+  if (c <= cell_cap) cell_begin[c] = k;
+  if (c >= cell_cap) return;
   CellKey ck;
   if (kCompact) {
     const int cb = info->coord_bits;
@@ -308,20 +356,34 @@ __global__ void cellsKernel(std::uint32_t m, const unsigned long long* __restric
                              static_cast<std::int64_t>((u >> (2 * cb)) & cm),
                              static_cast<std::int64_t>((u >> cb) & cm),
                              static_cast<std::int64_t>(u & cm));
+    cell_key[c] = u;
   } else {
     ck = CellKey{hi[k], key[k]};
+    cell_key[2 * std::size_t(c)] = ck.hi;
+    cell_key[2 * std::size_t(c) + 1] = ck.lo;
   }
-  cell_key[c] = ck;
   const unsigned long long h = detail::hashCellKey(ck);
   const unsigned long long val = ((h >> 32) << 32) | c;
-  unsigned long long s = h & slot_mask;
-  // Keys are unique (one thread per cell), so the first empty slot is ours.
-  while (atomicCAS(&slots[s], kEmptySlot, val) != kEmptySlot) s = (s + 1) & slot_mask;
+  unsigned int s = static_cast<unsigned int>(
+      (static_cast<unsigned long long>(static_cast<unsigned int>(h)) * slot_count) >> 32);
+  // Keys are unique (one thread per cell), so the first empty slot is ours; slot_count exceeds
+  // cell_cap, so there always is one.
+  while (atomicCAS(&slots[s], kEmptySlot, val) != kEmptySlot) s = s + 1 == slot_count ? 0u : s + 1;
 }
 
 // ---------------------------------------------------------------------------------------------
 // Query kernels
 // ---------------------------------------------------------------------------------------------
+
+/// The BuildInfo of the query's meshes (A in 0, B in 1; a self query uses 0), copied there on the
+/// device (cudaMemcpyToSymbolAsync, device to device) before the candidate kernel: the grid of a
+/// re-hash never passes through the host, and uniform reads of constant memory are as cheap as
+/// kernel parameters.
+/// (Raw bytes: BuildInfo's members have default initialisers, which __constant__ does not allow.)
+__constant__ __align__(16) unsigned char c_info[2 * sizeof(BuildInfo)];
+__device__ __forceinline__ const BuildInfo& cInfo(int k) {
+  return reinterpret_cast<const BuildInfo*>(c_info)[k];
+}
 
 /// Where pairs go: key (a << b_bits) | b (so a radix sort on b_bits + a_bits bits sorts (a, b)),
 /// appended at an atomic counter; slots past `capacity` are counted but not written, so the host
@@ -362,7 +424,8 @@ template <class S, int G, int MB>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     interCandidatesKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
                           std::uint32_t na, std::uint32_t nb, bool identity,
-                          Transform<double> b_to_a, double eps, PairSink cand) {
+                          Transform<double> b_to_a, double eps_coef, double eps_tmag,
+                          PairSink cand) {
   // One tile of G lanes per query triangle (tile-uniform index).
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
   const auto idx = static_cast<std::uint32_t>(
@@ -370,16 +433,16 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
   if (idx < na) {
     const std::uint32_t i = idx;
     const double di = A.diam[i];
-    if (di > B.d_max) return;  // nothing in B is as large
+    if (di > cInfo(1).d_max) return;  // nothing in B is as large
     const Aabb<double> q =
         detail::triangleBox<double>(va[A.t[3 * i]], va[A.t[3 * i + 1]], va[A.t[3 * i + 2]]);
     scanCandidatesGroup(
-        B, q, di, tile, [&](std::uint32_t, double dj) { return dj >= di; },
+        B, cInfo(1), q, di, tile, [&](std::uint32_t, double dj) { return dj >= di; },
         [&](std::uint32_t j) { emitPair(cand, i, j); });
   } else if (idx < na + nb) {
     const std::uint32_t j = idx - na;
     const double dj = B.diam[j];
-    if (dj >= A.d_max) return;  // nothing in A is strictly larger
+    if (dj >= cInfo(0).d_max) return;  // nothing in A is strictly larger
     Aabb<double> q;
     if (identity) {
       q = boxOf(B, j);
@@ -389,10 +452,17 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
         const Vec3<S> w = B.v[B.t[3 * j + k]];
         p[k] = b_to_a.apply(Vec3<double>{double(w.x), double(w.y), double(w.z)});
       }
+      // The bound on the rounding of B's box mapped back into A's frame (a conservative bound,
+      // from both meshes' bounds, which live on the device).
+      double mag = eps_tmag;
+      for (int k = 0; k < 3; ++k)
+        mag += fmax(fabs(cInfo(0).bounds.lo[k]), fabs(cInfo(0).bounds.hi[k])) +
+               fmax(fabs(cInfo(1).bounds.lo[k]), fabs(cInfo(1).bounds.hi[k]));
+      const double eps = eps_coef * mag + 2.2250738585072014e-308;
       q = detail::inflate(detail::triangleBox<double>(p[0], p[1], p[2]), eps);
     }
     scanCandidatesGroup(
-        A, q, dj, tile, [&](std::uint32_t, double di) { return di > dj; },
+        A, cInfo(0), q, dj, tile, [&](std::uint32_t, double di) { return di > dj; },
         [&](std::uint32_t i) { emitPair(cand, i, j); });
   }
 }
@@ -409,7 +479,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
   const std::uint32_t ti[3] = {M.t[3 * i], M.t[3 * i + 1], M.t[3 * i + 2]};
   const Vec3<S> vi[3] = {M.v[ti[0]], M.v[ti[1]], M.v[ti[2]]};
   scanCandidatesGroup(
-      M, boxOf(M, i), di, tile,
+      M, cInfo(0), boxOf(M, i), di, tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
         // Adjacent pairs (a shared vertex index or coordinate) never reach phase 2: on a
@@ -469,6 +539,58 @@ __global__ void __launch_bounds__(kQueryBlock)
     if (!adjacent &&
         detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2]))
       emitPair(out, i < j ? i : j, i < j ? j : i);
+  }
+}
+
+/// detail::orient3dFilterSign (the filter of orient3dSign() alone, exact_predicates.h) on the
+/// mesh's coordinates converted to double exactly, as trianglesIntersectWith does: +1 or -1 only
+/// where that is the exact sign of orient3d(a, b, c, d), 0 where it cannot tell (the exact
+/// predicate would fall back to expansion arithmetic, which this kernel never runs).
+template <class S>
+__device__ __forceinline__ int orient3dFilterSign(const Vec3<S>& pa, const Vec3<S>& pb,
+                                                  const Vec3<S>& pc, const Vec3<S>& pd) {
+  return detail::orient3dFilterSign(detail::toDouble(pa), detail::toDouble(pb),
+                                    detail::toDouble(pc), detail::toDouble(pd));
+}
+
+/// True when the filter proves all three vertices of triangle p strictly on one side of the
+/// plane of triangle q (orient3d(q0, q1, q2, p_k) all +1 or all -1): exactly a rejection of
+/// trianglesIntersectWith<ExactKernel>, whose first two tests are these signs, exactly. The
+/// vertices are loaded where they are used, so few stay live in registers.
+template <class S>
+__device__ __forceinline__ bool strictlyOneSide(const Vec3<S>* __restrict__ qv,
+                                                const std::uint32_t* __restrict__ qt,
+                                                const Vec3<S>* __restrict__ pv,
+                                                const std::uint32_t* __restrict__ pt) {
+  const Vec3<S> q0 = qv[qt[0]], q1 = qv[qt[1]], q2 = qv[qt[2]];
+  const int s = orient3dFilterSign(q0, q1, q2, pv[pt[0]]);
+  if (s == 0) return false;
+  if (orient3dFilterSign(q0, q1, q2, pv[pt[1]]) != s) return false;
+  return orient3dFilterSign(q0, q1, q2, pv[pt[2]]) == s;
+}
+
+/// Between phases 1 and 2 (Predicate::Exact only): one thread per candidate drops the pair when
+/// either triangle lies, provably, strictly on one side of the other's plane; the survivors are
+/// appended to `out` (the same (i << 32) | j keys) for the exact kernel. Every dropped pair is one
+/// the exact test rejects, so the result set cannot change; the exact kernel (128 registers, low
+/// occupancy) then runs on several times fewer pairs. Inter queries pass A's mapped vertices as
+/// (va, ta) and B's as (vb, tb); self queries pass the mesh twice. MB: blocks per SM in
+/// __launch_bounds__ (6: at most 40 registers, a few spills; 1: uncapped, ~76 registers).
+template <class S, int MB>
+__global__ void __launch_bounds__(kFilterBlock, MB)
+    planeFilterKernel(const unsigned long long* __restrict__ cand,
+                      const unsigned long long* count, unsigned long long capacity,
+                      const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
+                      const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
+                      PairSink out) {
+  const unsigned long long m = *count < capacity ? *count : capacity;
+  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
+       k += gridDim.x * blockDim.x) {
+    const unsigned long long c = cand[k];
+    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+    const bool drop = strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
+                      strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j));
+    if (!drop) emitPair(out, i, j);
   }
 }
 
@@ -541,11 +663,29 @@ struct CachedMesh {
   DeviceBuffer<double> diam;
   DeviceBuffer<std::uint8_t> level;
   DeviceBuffer<std::uint32_t> entry_tri, cell_begin;
-  DeviceBuffer<CellKey> cell_key;
+  DeviceBuffer<unsigned long long> cell_key;  // key_words per cell
   DeviceBuffer<unsigned long long> slots;
-  unsigned long long slot_mask = 0;
-  std::uint64_t entries = 0;
-  BuildInfo info{};
+  DeviceBuffer<BuildInfo> dinfo;  // this mesh's grid and sizes, on the device
+  PinnedBuffer staging;  // vertex/triangle uploads (per mesh: two uploads can be in flight)
+  std::uint32_t slot_count = 0;
+  int key_words = 0;          // 1: compact 64-bit cell keys, 2: 128-bit
+  std::uint32_t entry_cap = 0, cell_cap = 0;  // what entry_tri / the cell arrays can hold
+  int sort_bits = 0;          // compact keys: the bits the entry sort covers
+  bool pending = false;       // re-hashed without read-back: check the sizes at the query's
+  std::uint32_t pending_entry_cap = 0, pending_cell_cap = 0;  // what that re-hash could store
+  BuildInfo info{};           // the host's copy (after a read-back; stale while pending)
+  cudaGraphExec_t graph = nullptr;  // the re-hash without read-back (rehashFromGraph)
+  std::vector<std::uintptr_t> graph_key;  // the sizes and buffers it was captured with
+
+  CachedMesh() = default;
+  CachedMesh(const CachedMesh&) = delete;
+  CachedMesh& operator=(const CachedMesh&) = delete;
+  ~CachedMesh() { dropGraph(); }
+  void dropGraph() noexcept {
+    if (graph != nullptr) (void)cudaGraphExecDestroy(graph);
+    graph = nullptr;
+    graph_key.clear();
+  }
 
   HashView<S> view() const {
     HashView<S> h;
@@ -557,17 +697,14 @@ struct CachedMesh {
     h.cell_begin = cell_begin.data();
     h.cell_key = cell_key.data();
     h.slots = slots.data();
-    h.slot_mask = slot_mask;
-    h.grid = info.grid;
-    h.bounds = info.bounds;
-    h.level_mask = info.level_mask;
-    h.top_level = info.top_level;
-    h.d_max = info.d_max;
+    h.slot_count = slot_count;
+    h.key_words = key_words;
     return h;
   }
   std::size_t bytes() const {
     return v.bytes() + t.bytes() + box.bytes() + diam.bytes() + level.bytes() +
-           entry_tri.bytes() + cell_begin.bytes() + cell_key.bytes() + slots.bytes();
+           entry_tri.bytes() + cell_begin.bytes() + cell_key.bytes() + slots.bytes() +
+           dinfo.bytes();
   }
 };
 
@@ -603,17 +740,13 @@ struct Context {
 
   // Scratch shared by all builds and queries (serialised by the mutex).
   DeviceBuffer<unsigned char> cub_temp;
-  DeviceBuffer<BuildReduce> red;
-  DeviceBuffer<BuildInfo> info;
-  DeviceBuffer<std::uint32_t> counts, offsets;
-  DeviceBuffer<unsigned long long> keys_a, keys_b, hi_a, hi_b;
-  DeviceBuffer<std::uint32_t> vals_a, vals_b, tri_of, head, cell_index;
-  DeviceBuffer<std::uint32_t> size_key, size_key_sorted, ids, by_size, counts_by_size;
+  DeviceBuffer<BuildReduce> red;  // reset by gridKernel after each use
+  bool red_ready = false;
+  // The build's sort and count scratch is carved out of cands / pairs / pairs_sorted (rebuild()).
   DeviceBuffer<Vec3<float>> mapped_f;
   DeviceBuffer<Vec3<double>> mapped_d;
-  DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;  // pair_count: 2
-  PinnedBuffer host_small;  // BuildInfo + entry total + pair count
-  PinnedBuffer staging;     // vertex/triangle uploads
+  DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;  // pair_count: 3
+  PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + pair counts
   PinnedBuffer readback;    // sorted pairs on their way into the result
 
   std::list<CachedMesh<float>> meshes_f;
@@ -630,18 +763,18 @@ struct Context {
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
     for (cudaEvent_t& e : ev) CUDA_TRY(cudaEventCreate(&e));
     red.reserve(1);
-    info.reserve(1);
-    pair_count.reserve(2);
-    host_small.reserve(sizeof(BuildInfo) + 3 * sizeof(unsigned long long));
+    pair_count.reserve(3);
+    host_small.reserve(3 * sizeof(BuildInfo) + 8 * sizeof(unsigned long long));
     ready = true;
   }
 
-  BuildInfo* hostInfo() { return static_cast<BuildInfo*>(host_small.data()); }
+  BuildInfo* hostInfo(int k = 0) { return static_cast<BuildInfo*>(host_small.data()) + k; }
   unsigned long long* hostTotal() {
     return reinterpret_cast<unsigned long long*>(static_cast<char*>(host_small.data()) +
-                                                 sizeof(BuildInfo));
+                                                 3 * sizeof(BuildInfo));
   }
-  unsigned long long* hostCount() { return hostTotal() + 1; }
+  unsigned long long* hostCells() { return hostTotal() + 1; }
+  unsigned long long* hostCount() { return hostTotal() + 2; }
 
   /// Drops all device memory without throwing (after a CUDA error, or on request): the next
   /// call re-uploads what it needs.
@@ -649,39 +782,19 @@ struct Context {
     meshes_f.clear();
     meshes_d.clear();
     cub_temp.release();
-    counts.release();
-    offsets.release();
-    keys_a.release();
-    keys_b.release();
-    hi_a.release();
-    hi_b.release();
-    vals_a.release();
-    vals_b.release();
-    tri_of.release();
-    head.release();
-    cell_index.release();
-    size_key.release();
-    size_key_sorted.release();
-    ids.release();
-    by_size.release();
-    counts_by_size.release();
     mapped_f.release();
     mapped_d.release();
     cands.release();
     pairs.release();
     pairs_sorted.release();
-    staging.release();
     readback.release();
+    red_ready = false;
   }
 
   std::size_t bytes() const {
-    std::size_t b = cub_temp.bytes() + red.bytes() + info.bytes() + counts.bytes() +
-                    offsets.bytes() + keys_a.bytes() + keys_b.bytes() + hi_a.bytes() +
-                    hi_b.bytes() + vals_a.bytes() + vals_b.bytes() + tri_of.bytes() +
-                    head.bytes() + cell_index.bytes() + size_key.bytes() +
-                    size_key_sorted.bytes() + ids.bytes() + by_size.bytes() +
-                    counts_by_size.bytes() + mapped_f.bytes() + mapped_d.bytes() +
-                    cands.bytes() + pairs.bytes() + pairs_sorted.bytes() + pair_count.bytes();
+    std::size_t b = cub_temp.bytes() + red.bytes() + mapped_f.bytes() +
+                    mapped_d.bytes() + cands.bytes() + pairs.bytes() + pairs_sorted.bytes() +
+                    pair_count.bytes();
     for (const auto& m : meshes_f) b += m.bytes();
     for (const auto& m : meshes_d) b += m.bytes();
     return b;
@@ -712,170 +825,392 @@ void cubCall(Context& ctx, F&& f) {
   CUDA_TRY(f(static_cast<void*>(ctx.cub_temp.data()), bytes));
 }
 
-/// Uploads (vertices, and triangles when `upload_tris`) and rebuilds the hierarchy of one mesh on
-/// the device. Reads back the grid and the entry count once (to size the entry arrays and the
-/// sort); everything else stays on the device.
-template <class S>
-void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool upload_tris) {
-  const cudaStream_t s = ctx.stream;
-  const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
-  if (nt > 150000000u)
-    throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(nt) +
-                            " triangles (at most 150,000,000)");
-  const std::size_t vbytes = nv * sizeof(Vec3<S>), tbytes = upload_tris ? nt * sizeof(Triangle) : 0;
-  ctx.staging.reserve(vbytes + tbytes);
-  char* stage = static_cast<char*>(ctx.staging.data());
-  if (vbytes) std::memcpy(stage, mesh.vertices.data(), vbytes);
-  if (tbytes) std::memcpy(stage + vbytes, mesh.triangles.data(), tbytes);
-  m.v.reserve(nv);
-  if (vbytes) CUDA_TRY(cudaMemcpyAsync(m.v.data(), stage, vbytes, cudaMemcpyHostToDevice, s));
-  if (upload_tris) {
-    m.t.reserve(3 * nt);
-    if (tbytes)
-      CUDA_TRY(cudaMemcpyAsync(m.t.data(), stage + vbytes, tbytes, cudaMemcpyHostToDevice, s));
-  }
-  m.nv = nv;
-  m.nt = nt;
-  m.entries = 0;
-  m.info = BuildInfo{};
-  if (nt == 0) {
-    CUDA_TRY(cudaStreamSynchronize(s));  // the staging buffer is free again
-    return;
-  }
-  const auto n = static_cast<std::uint32_t>(nt);
-  m.box.reserve(nt);
-  m.diam.reserve(nt);
-  m.level.reserve(nt);
-  ctx.counts.reserve(nt + 1);
-  ctx.offsets.reserve(nt + 1);
+/// KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads the sizes back (the round-3 behaviour, for
+/// comparisons); KDET_FCL_CUDA_FULL_KEYS=1: 128-bit cell keys even where the compact 64-bit key
+/// is exact (tests). Both read at every build.
+bool envFlag(const char* name) {
+  const char* e = std::getenv(name);
+  return e && *e == '1';
+}
 
-  CUDA_TRY(cudaMemsetAsync(ctx.red.data(), 0xFF, 4 * sizeof(unsigned long long), s));
-  CUDA_TRY(cudaMemsetAsync(reinterpret_cast<char*>(ctx.red.data()) + 4 * sizeof(unsigned long long),
-                           0, 4 * sizeof(unsigned long long), s));
+inline std::size_t roundUp(std::size_t x, std::size_t a) { return (x + a - 1) / a * a; }
+
+/// KDET_FCL_CUDA_REHASH_CAP=k (tests): a re-hash without read-back uses at most k entries and k
+/// cells, so that it overflows and takes the fallback. 0 or unset: the arrays' capacities.
+std::uint32_t rehashCap(std::uint32_t cap) {
+  const char* e = std::getenv("KDET_FCL_CUDA_REHASH_CAP");
+  const unsigned long long k = (e && *e) ? std::strtoull(e, nullptr, 10) : 0;
+  return k > 0 && k < cap ? static_cast<std::uint32_t>(k) : cap;
+}
+
+/// The device part of rebuild() after the uploads: everything a re-hash without read-back
+/// enqueues (and, for a build with read-backs, the read-backs too). Allocates only where a
+/// buffer must grow; a re-hash replayed from a graph has all of them reserved beforehand
+/// (reserveRehash()).
+template <class S>
+void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
+  const cudaStream_t s = ctx.stream;
+  const auto n = static_cast<std::uint32_t>(nt);
+  m.box.reserve(nt, false);
+  m.diam.reserve(nt, false);
+  m.level.reserve(nt, false);
+  BuildInfo* const dinfo = m.dinfo.data();
+  // The per-triangle scratch of the build (counts, offsets, the size sort) lives in the output
+  // buffers of the queries (`pairs`, `pairs_sorted`), idle during a build: 256-byte aligned
+  // arrays of n4 words. Nothing reallocates those two buffers before the build's last use.
+  const std::size_t n4 = (nt + 1 + 63) & ~std::size_t(63);
+  ctx.pairs_sorted.reserve(2 * n4);  // 4 arrays of n4 words
+  ctx.pairs.reserve(3 * n4 / 2);     // 3 arrays of n4 words
+  std::uint32_t* const sort_arena = reinterpret_cast<std::uint32_t*>(ctx.pairs_sorted.data());
+  std::uint32_t* const count_arena = reinterpret_cast<std::uint32_t*>(ctx.pairs.data());
+  std::uint32_t* const tri_counts = count_arena;
+  std::uint32_t* const offsets = count_arena + n4;
+  std::uint32_t* const counts = count_arena + 2 * n4;  // in size order
+
+  if (!ctx.red_ready) {  // afterwards gridKernel leaves them reset
+    CUDA_TRY(cudaMemsetAsync(ctx.red.data(), 0xFF, 4 * sizeof(unsigned long long), s));
+    CUDA_TRY(cudaMemsetAsync(reinterpret_cast<char*>(ctx.red.data()) + 4 * sizeof(unsigned long long),
+                             0, 4 * sizeof(unsigned long long), s));
+    ctx.red_ready = true;
+  }
   const unsigned int tri_blocks =
       std::min<unsigned int>(blocksFor(nt, kBuildBlock), static_cast<unsigned int>(4 * g_num_sms));
   trianglesKernel<S><<<tri_blocks, kBuildBlock, 0, s>>>(n, m.v.data(), m.t.data(), m.box.data(),
                                                         m.diam.data(), ctx.red.data());
   checkLaunch();
-  gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), ctx.info.data());
+  gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? m.sort_bits : 0);
   checkLaunch();
-  ctx.size_key.reserve(nt);
-  ctx.size_key_sorted.reserve(nt);
-  ctx.ids.reserve(nt);
-  ctx.by_size.reserve(nt);
-  ctx.counts_by_size.reserve(nt + 1);
   countKernel<S><<<blocksFor(nt + 1, kBuildBlock), kBuildBlock, 0, s>>>(
-      n, m.box.data(), m.diam.data(), ctx.info.data(), m.level.data(), ctx.counts.data(),
-      ctx.size_key.data(), ctx.ids.data());
+      n, m.box.data(), m.diam.data(), dinfo, m.level.data(), tri_counts, sort_arena,
+      sort_arena + 2 * n4);
   checkLaunch();
+  // Double-buffered sorts (here and below): CUB then needs no temporary copy of the keys and
+  // values, only its histograms, which keeps the shared temporary storage small.
+  std::uint32_t* by_size = nullptr;
   {
-    std::uint32_t* sk = ctx.size_key.data();
-    std::uint32_t* sks = ctx.size_key_sorted.data();
-    std::uint32_t* ids = ctx.ids.data();
-    std::uint32_t* by_size = ctx.by_size.data();
+    cub::DoubleBuffer<std::uint32_t> sk(sort_arena, sort_arena + n4);
+    cub::DoubleBuffer<std::uint32_t> ids(sort_arena + 2 * n4, sort_arena + 3 * n4);
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-      return cub::DeviceRadixSort::SortPairs(tmp, bytes, sk, sks, ids, by_size,
-                                             static_cast<int>(nt), 0, 32, s);
+      return cub::DeviceRadixSort::SortPairs(tmp, bytes, sk, ids, static_cast<int>(nt), 0, 32, s);
     });
+    by_size = ids.Current();
   }
   countsBySizeKernel<<<blocksFor(nt + 1, kBuildBlock), kBuildBlock, 0, s>>>(
-      n, ctx.counts.data(), ctx.by_size.data(), ctx.counts_by_size.data());
+      n, tri_counts, by_size, counts);
   checkLaunch();
-  std::uint32_t* counts = ctx.counts_by_size.data();
-  std::uint32_t* offsets = ctx.offsets.data();
   cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
     return cub::DeviceScan::ExclusiveSum(tmp, bytes, counts, offsets, static_cast<int>(nt + 1), s);
   });
-  CUDA_TRY(cudaMemcpyAsync(ctx.hostInfo(), ctx.info.data(), sizeof(BuildInfo),
-                           cudaMemcpyDeviceToHost, s));
-  *ctx.hostTotal() = 0;
-  CUDA_TRY(cudaMemcpyAsync(ctx.hostTotal(), offsets + nt, sizeof(std::uint32_t),
-                           cudaMemcpyDeviceToHost, s));
-  CUDA_TRY(cudaStreamSynchronize(s));
-  m.info = *ctx.hostInfo();
-  const std::uint64_t total = *ctx.hostTotal();
-  m.entries = total;
-  const auto mt = static_cast<std::uint32_t>(total);
+  bool compact = true;
+  if (!async) {
+    CUDA_TRY(cudaMemcpyAsync(ctx.hostInfo(), dinfo, sizeof(BuildInfo), cudaMemcpyDeviceToHost, s));
+    *ctx.hostTotal() = 0;
+    CUDA_TRY(cudaMemcpyAsync(ctx.hostTotal(), offsets + nt, sizeof(std::uint32_t),
+                             cudaMemcpyDeviceToHost, s));
+    CUDA_TRY(cudaStreamSynchronize(s));
+    m.info = *ctx.hostInfo();
+    const std::uint64_t total = *ctx.hostTotal();
+    if (total > 0xF0000000ull)
+      throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(total) +
+                              " cell entries");
+    compact = m.info.fits64 != 0 && !envFlag("KDET_FCL_CUDA_FULL_KEYS");
+    m.entry_tri.reserve(total);  // 1/8 slack: room for the next re-hash without read-back
+    m.entry_cap = static_cast<std::uint32_t>(std::min<std::size_t>(m.entry_tri.capacity(), 0xF0000000ull));
+    m.key_words = compact ? 1 : 2;
+    // The compact sort covers whole 8-bit digits (CUB's radix passes): the bits up to the next
+    // digit boundary are free room for a re-hash whose grid grows; beyond them it falls back.
+    // (Three bits of guaranteed room cost one more pass in call 1: slower, not kept.)
+    const int key_bits = m.info.level_bits + 3 * m.info.coord_bits;
+    m.sort_bits = static_cast<int>(std::min<std::size_t>(64, roundUp(key_bits, 8)));
+  }
+  const std::uint32_t cap = async ? rehashCap(m.entry_cap) : m.entry_cap;
+  const std::uint32_t cell_cap = async ? rehashCap(m.cell_cap) : 0;  // sync: set below
+  const unsigned int eb = blocksFor(cap, kBuildBlock);
 
-  ctx.keys_a.reserve(total);
-  ctx.keys_b.reserve(total);
-  ctx.vals_a.reserve(total);
-  ctx.head.reserve(total);
-  ctx.cell_index.reserve(total);
-  m.entry_tri.reserve(total);
-  m.cell_begin.reserve(total + 1);
-  m.cell_key.reserve(total);
-  std::size_t slots = 64;
-  while (slots < total + total / 2) slots <<= 1;
-  m.slots.reserve(slots);
-  m.slot_mask = slots - 1;
-  CUDA_TRY(cudaMemsetAsync(m.slots.data(), 0xFF, slots * sizeof(unsigned long long), s));
-
-  unsigned long long* keys_a = ctx.keys_a.data();
-  unsigned long long* keys_b = ctx.keys_b.data();
-  std::uint32_t* vals_a = ctx.vals_a.data();
-  const unsigned int eb = blocksFor(total, kBuildBlock);
-  const bool compact = m.info.fits64 != 0;
+  // The entry-sized scratch of the sort lives in the candidate buffer of the queries, which is
+  // idle during a build (same stream, and the context's mutex serialises the calls): no separate
+  // memory for it. Each array starts on a 256-byte boundary.
+  const std::size_t e8 = (static_cast<std::size_t>(cap) + 31) & ~std::size_t(31);
+  const std::size_t e4 = ((static_cast<std::size_t>(cap) + 1) / 2 + 31) & ~std::size_t(31);
+  ctx.cands.reserve(compact ? 2 * e8 + e4 : 4 * e8 + 3 * e4);
+  unsigned long long* const arena = ctx.cands.data();
+  unsigned long long* keys_a = arena;
+  unsigned long long* keys_b = arena + e8;
+  std::uint32_t* vals_a = reinterpret_cast<std::uint32_t*>(arena + (compact ? 2 : 4) * e8);
   const unsigned long long* hi_sorted = nullptr;
+  const unsigned long long* keys_sorted = keys_b;
+  // Padding: the entries past the real ones (the host may not know how many there are) keep
+  // all-one keys, which sort after every real key (stably, so real entries come first).
+  CUDA_TRY(cudaMemsetAsync(keys_a, 0xFF, cap * sizeof(unsigned long long), s));
+  // After the sorts, a free key-sized buffer holds the run heads and their scan (2 x 4 bytes per
+  // entry in 8 bytes per entry), instead of two more entry-sized arrays.
+  unsigned long long* spare = keys_a;
   if (compact) {
     fillKernel<S, true><<<blocksFor(nt, kBuildBlock), kBuildBlock, 0, s>>>(
-        n, m.box.data(), m.level.data(), offsets, ctx.by_size.data(), ctx.info.data(), keys_a,
-        nullptr, vals_a, nullptr);
+        n, m.box.data(), m.level.data(), offsets, by_size, dinfo, keys_a, nullptr, vals_a,
+        nullptr, cap, dinfo);
     checkLaunch();
-    const int key_bits = m.info.level_bits + 3 * m.info.coord_bits;
     std::uint32_t* entry_tri = m.entry_tri.data();
+    cub::DoubleBuffer<unsigned long long> kb(keys_a, keys_b);
+    cub::DoubleBuffer<std::uint32_t> vb(vals_a, entry_tri);
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-      return cub::DeviceRadixSort::SortPairs(tmp, bytes, keys_a, keys_b, vals_a, entry_tri,
-                                             static_cast<int>(total), 0, key_bits, s);
+      return cub::DeviceRadixSort::SortPairs(tmp, bytes, kb, vb, static_cast<int>(cap), 0,
+                                             m.sort_bits, s);
     });
+    keys_sorted = kb.Current();
+    spare = kb.Alternate();
+    if (vb.Current() != entry_tri)
+      CUDA_TRY(cudaMemcpyAsync(entry_tri, vb.Current(), cap * sizeof(std::uint32_t),
+                               cudaMemcpyDeviceToDevice, s));
   } else {
-    // Full 128-bit keys: two stable passes (low word, then high word) sort by (hi, lo).
-    ctx.hi_a.reserve(total);
-    ctx.hi_b.reserve(total);
-    ctx.vals_b.reserve(total);
-    ctx.tri_of.reserve(total);
-    unsigned long long* hi_a = ctx.hi_a.data();
-    unsigned long long* hi_b = ctx.hi_b.data();
-    std::uint32_t* vals_b = ctx.vals_b.data();
+    // Full 128-bit keys (never re-hashed without read-back, so cap >= entries): two stable
+    // passes (low word, then high word) sort by (hi, lo).
+    unsigned long long* hi_a = arena + 2 * e8;
+    unsigned long long* hi_b = arena + 3 * e8;
+    std::uint32_t* vals_b = reinterpret_cast<std::uint32_t*>(arena + 4 * e8 + e4);
+    std::uint32_t* tri_of = reinterpret_cast<std::uint32_t*>(arena + 4 * e8 + 2 * e4);
+    CUDA_TRY(cudaMemsetAsync(hi_a, 0xFF, cap * sizeof(unsigned long long), s));
     fillKernel<S, false><<<blocksFor(nt, kBuildBlock), kBuildBlock, 0, s>>>(
-        n, m.box.data(), m.level.data(), offsets, ctx.by_size.data(), ctx.info.data(), keys_a,
-        hi_a, vals_a, ctx.tri_of.data());
+        n, m.box.data(), m.level.data(), offsets, by_size, dinfo, keys_a, hi_a, vals_a, tri_of,
+        cap, dinfo);
     checkLaunch();
+    const std::uint32_t mt = static_cast<std::uint32_t>(*ctx.hostTotal());  // read back above
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
       return cub::DeviceRadixSort::SortPairs(tmp, bytes, keys_a, keys_b, vals_a, vals_b,
-                                             static_cast<int>(total), 0, 64, s);
+                                             static_cast<int>(mt), 0, 64, s);
     });
-    gatherKeysKernel<<<eb, kBuildBlock, 0, s>>>(mt, hi_a, vals_b, hi_b);
+    const unsigned int mb = blocksFor(mt, kBuildBlock);
+    gatherKeysKernel<<<mb, kBuildBlock, 0, s>>>(mt, hi_a, vals_b, hi_b);
     checkLaunch();
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
       return cub::DeviceRadixSort::SortPairs(tmp, bytes, hi_b, hi_a, vals_b, vals_a,
-                                             static_cast<int>(total), 0, 64, s);
+                                             static_cast<int>(mt), 0, 64, s);
     });
-    gatherKeysKernel<<<eb, kBuildBlock, 0, s>>>(mt, keys_a, vals_a, keys_b);
+    gatherKeysKernel<<<mb, kBuildBlock, 0, s>>>(mt, keys_a, vals_a, keys_b);
     checkLaunch();
-    gatherTrisKernel<<<eb, kBuildBlock, 0, s>>>(mt, ctx.tri_of.data(), vals_a, m.entry_tri.data());
+    gatherTrisKernel<<<mb, kBuildBlock, 0, s>>>(mt, tri_of, vals_a, m.entry_tri.data());
     checkLaunch();
     hi_sorted = hi_a;
   }
-  std::uint32_t* head = ctx.head.data();
-  std::uint32_t* cell_index = ctx.cell_index.data();
+  std::uint32_t* head = reinterpret_cast<std::uint32_t*>(spare);
+  std::uint32_t* cell_index = head + cap;
+  // A re-hash keeps the table's size, so the heads kernel empties it; a build with read-backs
+  // sizes it after the cell count and clears it with a memset.
+  unsigned long long* const clear = async ? m.slots.data() : nullptr;
   if (compact)
-    headsKernel<true><<<eb, kBuildBlock, 0, s>>>(mt, keys_b, nullptr, head);
+    headsKernel<true><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, nullptr, head, clear,
+                                                 m.slot_count);
   else
-    headsKernel<false><<<eb, kBuildBlock, 0, s>>>(mt, keys_b, hi_sorted, head);
+    headsKernel<false><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, hi_sorted, head, clear,
+                                                  m.slot_count);
   checkLaunch();
   cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-    return cub::DeviceScan::ExclusiveSum(tmp, bytes, head, cell_index, static_cast<int>(total), s);
+    return cub::DeviceScan::ExclusiveSum(tmp, bytes, head, cell_index, static_cast<int>(cap), s);
   });
+  if (!async) {
+    // The cell count (heads past the entries are 0): size the cell arrays and the table by cells.
+    *ctx.hostCells() = 0;
+    std::uint32_t* hc = reinterpret_cast<std::uint32_t*>(ctx.hostCells());
+    CUDA_TRY(cudaMemcpyAsync(hc, cell_index + (cap - 1), sizeof(std::uint32_t),
+                             cudaMemcpyDeviceToHost, s));
+    CUDA_TRY(cudaMemcpyAsync(hc + 1, head + (cap - 1), sizeof(std::uint32_t),
+                             cudaMemcpyDeviceToHost, s));
+    CUDA_TRY(cudaStreamSynchronize(s));
+    const std::size_t cells = std::size_t(hc[0]) + hc[1];
+    m.cell_key.reserve(cells * m.key_words);
+    m.cell_begin.reserve(cells + cells / 8 + 1, false);
+    m.cell_cap = static_cast<std::uint32_t>(
+        std::min(m.cell_key.capacity() / m.key_words, m.cell_begin.capacity() - 1));
+    // Linear probing: most lookups are misses (empty cells of the query's range), which scan to
+    // the next empty slot, so the load stays low: 8 slots per cell where that is no more than
+    // one slot per entry (crowded cells, as in cloth: ~17 entries per cell on the UNC ball),
+    // and never fewer than 2 per cell. (A load of up to 2/3 cost 3-5% of phase 1 in call 1.)
+    const std::size_t c = m.cell_cap;
+    const std::size_t slots = std::max<std::size_t>(
+        64, std::max(2 * c, std::min<std::size_t>(8 * c, m.entry_cap)) + 1);
+    m.slots.reserve(slots, false);
+    m.slot_count = static_cast<std::uint32_t>(slots);
+    CUDA_TRY(cudaMemsetAsync(m.slots.data(), 0xFF, slots * sizeof(unsigned long long), s));
+  }
   if (compact)
-    cellsKernel<true><<<eb, kBuildBlock, 0, s>>>(mt, keys_b, nullptr, head, cell_index,
-                                                 ctx.info.data(), m.cell_begin.data(),
-                                                 m.cell_key.data(), m.slots.data(), m.slot_mask);
+    cellsKernel<true><<<eb, kBuildBlock, 0, s>>>(cap, keys_sorted, nullptr, head, cell_index,
+                                                 dinfo, async ? cell_cap : m.cell_cap,
+                                                 m.cell_begin.data(), m.cell_key.data(),
+                                                 m.slots.data(), m.slot_count);
   else
-    cellsKernel<false><<<eb, kBuildBlock, 0, s>>>(mt, keys_b, hi_sorted, head, cell_index,
-                                                  ctx.info.data(), m.cell_begin.data(),
-                                                  m.cell_key.data(), m.slots.data(), m.slot_mask);
+    cellsKernel<false><<<eb, kBuildBlock, 0, s>>>(cap, keys_sorted, hi_sorted, head, cell_index,
+                                                  dinfo, m.cell_cap, m.cell_begin.data(),
+                                                  m.cell_key.data(), m.slots.data(), m.slot_count);
   checkLaunch();
+  m.pending = async;
+  m.pending_entry_cap = cap;
+  m.pending_cell_cap = async ? cell_cap : m.cell_cap;
+  if (async) ++ctx.profile.rehashes_async;
+  else ++ctx.profile.builds_with_readback;
+}
+
+
+/// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
+bool envFlag0(const char* name) {
+  const char* e = std::getenv(name);
+  return e && *e == '0';
+}
+
+/// Grows, before a graph capture, every buffer that buildOnDevice(async) could grow (the same
+/// sizes it asks for), so that nothing allocates while the stream is captured.
+template <class S>
+void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
+  const cudaStream_t s = ctx.stream;
+  m.box.reserve(nt, false);
+  m.diam.reserve(nt, false);
+  m.level.reserve(nt, false);
+  const std::size_t n4 = (nt + 1 + 63) & ~std::size_t(63);
+  ctx.pairs_sorted.reserve(2 * n4);
+  ctx.pairs.reserve(3 * n4 / 2);
+  const std::uint32_t cap = rehashCap(m.entry_cap);
+  const std::size_t e8 = (static_cast<std::size_t>(cap) + 31) & ~std::size_t(31);
+  const std::size_t e4 = ((static_cast<std::size_t>(cap) + 1) / 2 + 31) & ~std::size_t(31);
+  ctx.cands.reserve(2 * e8 + e4);
+  std::size_t need = 0, b = 0;
+  {
+    cub::DoubleBuffer<std::uint32_t> sk(nullptr, nullptr), ids(nullptr, nullptr);
+    CUDA_TRY(cub::DeviceRadixSort::SortPairs(nullptr, b, sk, ids, static_cast<int>(nt), 0, 32, s));
+    need = std::max(need, b);
+    std::uint32_t* p = nullptr;
+    CUDA_TRY(cub::DeviceScan::ExclusiveSum(nullptr, b, p, p, static_cast<int>(nt + 1), s));
+    need = std::max(need, b);
+    cub::DoubleBuffer<unsigned long long> kb(nullptr, nullptr);
+    cub::DoubleBuffer<std::uint32_t> vb(nullptr, nullptr);
+    CUDA_TRY(cub::DeviceRadixSort::SortPairs(nullptr, b, kb, vb, static_cast<int>(cap), 0,
+                                             m.sort_bits, s));
+    need = std::max(need, b);
+    CUDA_TRY(cub::DeviceScan::ExclusiveSum(nullptr, b, p, p, static_cast<int>(cap), s));
+    need = std::max(need, b);
+  }
+  ctx.cub_temp.reserve(need);
+}
+
+/// A re-hash without read-back as one CUDA graph: its ~20 operations are the same for every
+/// re-hash of a mesh while its sizes and buffers stay the same, so the graph is captured once
+/// (on the first such re-hash, which it also runs) and replayed (one launch) afterwards; any
+/// change of a buffer address or size captures it again.
+template <class S>
+void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
+  const cudaStream_t s = ctx.stream;
+  reserveRehash(ctx, m, nt);
+  const std::uint32_t cap = rehashCap(m.entry_cap), cell_cap = rehashCap(m.cell_cap);
+  const std::vector<std::uintptr_t> key = {
+      nt, cap, cell_cap, m.slot_count, std::uintptr_t(m.sort_bits), std::uintptr_t(g_num_sms),
+      std::uintptr_t(ctx.red_ready),
+      reinterpret_cast<std::uintptr_t>(m.v.data()), reinterpret_cast<std::uintptr_t>(m.t.data()),
+      reinterpret_cast<std::uintptr_t>(m.box.data()),
+      reinterpret_cast<std::uintptr_t>(m.diam.data()),
+      reinterpret_cast<std::uintptr_t>(m.level.data()),
+      reinterpret_cast<std::uintptr_t>(m.entry_tri.data()),
+      reinterpret_cast<std::uintptr_t>(m.cell_begin.data()),
+      reinterpret_cast<std::uintptr_t>(m.cell_key.data()),
+      reinterpret_cast<std::uintptr_t>(m.slots.data()),
+      reinterpret_cast<std::uintptr_t>(m.dinfo.data()),
+      reinterpret_cast<std::uintptr_t>(ctx.red.data()),
+      reinterpret_cast<std::uintptr_t>(ctx.cands.data()),
+      reinterpret_cast<std::uintptr_t>(ctx.pairs.data()),
+      reinterpret_cast<std::uintptr_t>(ctx.pairs_sorted.data()),
+      reinterpret_cast<std::uintptr_t>(ctx.cub_temp.data()), ctx.cub_temp.capacity()};
+  if (m.graph == nullptr || m.graph_key != key) {
+    m.dropGraph();
+    cudaGraph_t g = nullptr;
+    CUDA_TRY(cudaStreamBeginCapture(s, cudaStreamCaptureModeRelaxed));
+    try {
+      buildOnDevice(ctx, m, nt, true);
+    } catch (...) {
+      (void)cudaStreamEndCapture(s, &g);
+      if (g != nullptr) (void)cudaGraphDestroy(g);
+      throw;
+    }
+    CUDA_TRY(cudaStreamEndCapture(s, &g));
+    const cudaError_t e = cudaGraphInstantiate(&m.graph, g, 0);
+    (void)cudaGraphDestroy(g);
+    if (e != cudaSuccess) {
+      m.graph = nullptr;
+      CUDA_TRY(e);
+    }
+    m.graph_key = key;
+  } else {
+    // What buildOnDevice() records on the host besides the enqueued work.
+    m.pending = true;
+    m.pending_entry_cap = cap;
+    m.pending_cell_cap = cell_cap;
+    ++ctx.profile.rehashes_async;
+  }
+  ++ctx.profile.rehash_graphs;
+  CUDA_TRY(cudaGraphLaunch(m.graph, s));
+}
+
+/// Uploads (vertices, and triangles when `upload_tris`) and rebuilds the hierarchy of one mesh on
+/// the device.
+/// - First build, new topology, 128-bit keys, or a failed re-hash: reads back the grid and the
+///   entry count, then the cell count, and sizes every array (with 1/8 slack) to them.
+/// - Re-hash of a mesh whose last build used compact keys (`try_async`): no read-back. The
+///   arrays keep their capacities; kernels read the sizes through pointers, sorts and scans run
+///   over the whole capacity (padding sorts last), and whatever does not fit is counted but not
+///   stored. The query reads this BuildInfo back with its pair counts (checkPending) and, if
+///   anything did not fit, rebuilds this way with read-backs and reruns. Such a re-hash runs
+///   as a CUDA graph (rehashFromGraph), unless KDET_FCL_CUDA_REHASH_GRAPH=0.
+template <class S>
+void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool upload_tris,
+             bool try_async) {
+  const cudaStream_t s = ctx.stream;
+  const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  if (nt > 150000000u)
+    throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(nt) +
+                            " triangles (at most 150,000,000)");
+  const bool async = try_async && !upload_tris && m.key_words == 1 && m.nt == nt &&
+                     m.nv == nv && m.entry_cap > 0 && !envFlag("KDET_FCL_CUDA_SYNC_REHASH");
+  const std::size_t vbytes = nv * sizeof(Vec3<S>), tbytes = upload_tris ? nt * sizeof(Triangle) : 0;
+  m.staging.reserve(vbytes + tbytes);
+  char* stage = static_cast<char*>(m.staging.data());
+  if (vbytes) std::memcpy(stage, mesh.vertices.data(), vbytes);
+  if (tbytes) std::memcpy(stage + vbytes, mesh.triangles.data(), tbytes);
+  m.v.reserve(nv, false);
+  if (vbytes) CUDA_TRY(cudaMemcpyAsync(m.v.data(), stage, vbytes, cudaMemcpyHostToDevice, s));
+  if (upload_tris) {
+    m.t.reserve(3 * nt, false);
+    if (tbytes)
+      CUDA_TRY(cudaMemcpyAsync(m.t.data(), stage + vbytes, tbytes, cudaMemcpyHostToDevice, s));
+  }
+  m.nv = nv;
+  m.nt = nt;
+  m.pending = false;
+  m.dinfo.reserve(1, false);
+  if (nt == 0) {
+    m.info = BuildInfo{};
+    m.key_words = 0;
+    m.entry_cap = 0;
+    CUDA_TRY(cudaMemcpyAsync(m.dinfo.data(), &m.info, sizeof(BuildInfo), cudaMemcpyHostToDevice, s));
+    CUDA_TRY(cudaStreamSynchronize(s));  // the staging buffer and m.info are free again
+    return;
+  }
+  if (async && !envFlag0("KDET_FCL_CUDA_REHASH_GRAPH")) {
+    rehashFromGraph(ctx, m, nt);
+    return;
+  }
+  buildOnDevice(ctx, m, nt, async);
+}
+
+/// After a query pass: a mesh re-hashed without read-back (pending) whose BuildInfo, copied to
+/// `host` with the pass's counts, shows that an array was too small or the keys outgrew the
+/// compact sort is rebuilt with read-backs. Returns true when it was (the query must rerun).
+template <class S>
+bool checkPending(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh,
+                  const BuildInfo& host) {
+  if (!m.pending) return false;
+  m.pending = false;
+  m.info = host;
+  if (!host.need_sync && host.entries <= m.pending_entry_cap && host.cells <= m.pending_cell_cap)
+    return false;
+  ++ctx.profile.rehash_fallbacks;
+  rebuild(ctx, m, mesh, false, false);
+  return true;
 }
 
 /// The cache entry of `hm`, brought up to date: nothing happens for a mesh whose geometry did not
@@ -903,7 +1238,7 @@ CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm) {
   const bool same_topology = only_vertices || (m.nt == mesh.triangles.size() &&
                                                m.t.data() != nullptr && m.host_tris == mesh.triangles);
   m.valid = false;
-  rebuild(ctx, m, mesh, !same_topology);
+  rebuild(ctx, m, mesh, !same_topology, same_topology);
   if (!same_topology) m.host_tris = mesh.triangles;
   m.version = hm.version();
   m.fingerprint = fp;
@@ -926,38 +1261,62 @@ unsigned long long capacityKnob() {
   return std::strtoull(e, nullptr, 10);
 }
 
-/// Runs `launch(sink)` until every pair fits (overflow: grow, rerun), then sorts the pairs on the
+/// The plane filter between the phases (Predicate::Exact only): KDET_FCL_CUDA_PLANE_FILTER=0
+/// turns it off (default on; read at every query, so tests and benchmarks can compare both).
+bool planeFilterOn() {
+  const char* e = std::getenv("KDET_FCL_CUDA_PLANE_FILTER");
+  return !(e && *e == '0');
+}
+
+/// Runs `launch(cand, survivors, out)` (it returns whether the plane filter ran) until every pair
+/// fits (overflow: grow, rerun), then sorts the pairs on the
 /// device and copies the first max_pairs (or all) of the sorted order into the result.
-template <class Launch>
-QueryResult runQuery(Context& ctx, Launch&& launch, int a_bits, int b_bits, std::size_t work,
-                     const QueryOptions& options) {
+template <class Launch, class Pending>
+QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
+                     std::size_t work, const QueryOptions& options) {
   const cudaStream_t s = ctx.stream;
   ctx.cands.reserve(std::max<std::size_t>(std::size_t(1) << 16, 8 * work));
   ctx.pairs.reserve(std::max<std::size_t>(std::size_t(1) << 16, work));
+  // The survivors of the plane filter live in the buffer that later receives the sorted pairs
+  // (they are dead by then, and there are never fewer survivors than pairs).
+  ctx.pairs_sorted.reserve(std::max<std::size_t>(std::size_t(1) << 16, 2 * work));
   unsigned long long cand_cap = ctx.cands.capacity(), cap = ctx.pairs.capacity();
+  unsigned long long surv_cap = ctx.pairs_sorted.capacity();
   const unsigned long long knob = capacityKnob();
   if (knob > 0) {
     cand_cap = std::min(cand_cap, knob);
     cap = std::min(cap, knob);
+    surv_cap = std::min(surv_cap, knob);
   }
   unsigned long long n = 0;
   int passes = 0;
   while (true) {
     ++passes;
-    CUDA_TRY(cudaMemsetAsync(ctx.pair_count.data(), 0, 2 * sizeof(unsigned long long), s));
-    launch(PairSink{ctx.cands.data(), ctx.pair_count.data(), cand_cap, 32},
-           PairSink{ctx.pairs.data(), ctx.pair_count.data() + 1, cap, b_bits});
+    CUDA_TRY(cudaMemsetAsync(ctx.pair_count.data(), 0, 3 * sizeof(unsigned long long), s));
+    const bool filtered =
+        launch(PairSink{ctx.cands.data(), ctx.pair_count.data(), cand_cap, 32},
+               PairSink{ctx.pairs_sorted.data(), ctx.pair_count.data() + 2, surv_cap, 32},
+               PairSink{ctx.pairs.data(), ctx.pair_count.data() + 1, cap, b_bits});
     checkLaunch();
-    CUDA_TRY(cudaMemcpyAsync(ctx.hostCount(), ctx.pair_count.data(), 2 * sizeof(unsigned long long),
+    CUDA_TRY(cudaMemcpyAsync(ctx.hostCount(), ctx.pair_count.data(), 3 * sizeof(unsigned long long),
                              cudaMemcpyDeviceToHost, s));
+    pending.enqueue();  // the BuildInfo of meshes re-hashed without read-back, same sync
     CUDA_TRY(cudaStreamSynchronize(s));
+    if (pending.check()) continue;  // a re-hash did not fit: rebuilt with read-backs, rerun
     const unsigned long long nc = ctx.hostCount()[0];
     n = ctx.hostCount()[1];
+    // Without the filter the exact kernel reads the candidates directly.
+    const unsigned long long ns = filtered ? ctx.hostCount()[2] : nc;
     ctx.profile.candidates = nc;
-    if (nc <= cand_cap && n <= cap) break;
+    ctx.profile.exact_tests = ns;
+    if (nc <= cand_cap && n <= cap && (!filtered || ns <= surv_cap)) break;
     // The device counted everything it could not store: grow and rerun (no pair is dropped).
     if (nc > 0x7FFFFFFFull || n > 0x7FFFFFFFull)
       throw Error("CUDA backend: more than 2^31-1 candidate pairs (" + std::to_string(nc) + ")");
+    if (filtered && ns > surv_cap) {
+      ctx.pairs_sorted.reserve(ns);
+      surv_cap = ctx.pairs_sorted.capacity();
+    }
     if (nc > cand_cap) {
       ctx.cands.reserve(nc);
       cand_cap = ctx.cands.capacity();
@@ -973,12 +1332,13 @@ QueryResult runQuery(Context& ctx, Launch&& launch, int a_bits, int b_bits, std:
   if (options.max_pairs > 0 && m > options.max_pairs) m = options.max_pairs;
   if (n > 0) {
     ctx.pairs_sorted.reserve(n);
-    unsigned long long* in = ctx.pairs.data();
-    unsigned long long* out = ctx.pairs_sorted.data();
+    cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
     const int bits = a_bits + b_bits;
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-      return cub::DeviceRadixSort::SortKeys(tmp, bytes, in, out, static_cast<int>(n), 0, bits, s);
+      return cub::DeviceRadixSort::SortKeys(tmp, bytes, keys, static_cast<int>(n), 0, bits, s);
     });
+    const unsigned long long* out = keys.Current();
+    unsigned long long* in = keys.Alternate();  // receives the unpacked pairs
     unpackPairsKernel<<<blocksFor(m, 256), 256, 0, s>>>(static_cast<std::uint32_t>(m), out, b_bits,
                                                          reinterpret_cast<uint2*>(in));
     checkLaunch();
@@ -1007,6 +1367,9 @@ QueryResult runQuery(Context& ctx, Launch&& launch, int a_bits, int b_bits, std:
     float t14 = 0;
     CUDA_TRY(cudaEventElapsedTime(&t14, ctx.ev[1], ctx.ev[4]));
     ctx.profile.candidates_ms = t14;
+    float t45 = 0;
+    CUDA_TRY(cudaEventElapsedTime(&t45, ctx.ev[4], ctx.ev[5]));
+    ctx.profile.filter_ms = t45;
     ctx.profile.passes = passes;
     ctx.profile.pairs = n;
   }
@@ -1073,6 +1436,74 @@ void withPredicate(Predicate p, F&& f) {
   }
 }
 
+/// Whether the plane filter runs between the phases. Only under Predicate::Exact: its signs are
+/// those of ExactKernel (filtered orient3dSign). The Float and Double kernels evaluate their
+/// determinants in their own rounding, which near a plane can disagree with the certified sign,
+/// and the filter must only drop pairs that the chosen kernel itself rejects.
+bool usePlaneFilter(const QueryOptions& options) {
+  return options.predicate == Predicate::Exact && planeFilterOn();
+}
+
+/// Register cap of the plane filter: KDET_FCL_CUDA_FILTER_MINBLOCKS = 6 (at most 40 registers,
+/// ~150 B of spills) or 1 (default: uncapped, ~76 registers). Read once. The uncapped kernel was
+/// measured faster (benchmarks/RESULTS-gpu.md, "Optimization round 3").
+int filterMinBlocks() {
+  static const int mb = [] {
+    const char* e = std::getenv("KDET_FCL_CUDA_FILTER_MINBLOCKS");
+    return (e && *e == '6' && e[1] == 0) ? 6 : 1;
+  }();
+  return mb;
+}
+
+/// Launches the plane filter (grid-stride over the device-side candidate count: 8 blocks of 256
+/// threads per SM).
+template <class S>
+void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
+                       const std::uint32_t* ta, const Vec3<S>* vb, const std::uint32_t* tb,
+                       const PairSink& surv) {
+  const auto blocks = static_cast<unsigned int>(8 * g_num_sms);
+  if (filterMinBlocks() == 1)
+    planeFilterKernel<S, 1><<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity,
+                                                            va, ta, vb, tb, surv);
+  else
+    planeFilterKernel<S, 6><<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity,
+                                                            va, ta, vb, tb, surv);
+  checkLaunch();
+}
+
+/// Copies the meshes' device BuildInfo into c_info (A in 0, B in 1): stream-ordered, device to
+/// device, so the candidate kernel sees the grids of re-hashes the host has not read.
+template <class S>
+void bindInfo(cudaStream_t s, const CachedMesh<S>& a, const CachedMesh<S>* b) {
+  CUDA_TRY(cudaMemcpyToSymbolAsync(c_info, a.dinfo.data(), sizeof(BuildInfo), 0,
+                                   cudaMemcpyDeviceToDevice, s));
+  if (b != nullptr)
+    CUDA_TRY(cudaMemcpyToSymbolAsync(c_info, b->dinfo.data(), sizeof(BuildInfo), sizeof(BuildInfo),
+                                     cudaMemcpyDeviceToDevice, s));
+}
+
+/// The pending re-hashes of a query (at most two meshes): their BuildInfo rides on the pass's
+/// read-back (enqueue), and check() rebuilds those that did not fit.
+template <class S>
+struct PendingBuilds {
+  Context& ctx;
+  CachedMesh<S>* m[2];
+  const TriangleMesh<S>* mesh[2];
+  void enqueue() {
+    for (int k = 0; k < 2; ++k)
+      if (m[k] != nullptr && m[k]->pending)
+        CUDA_TRY(cudaMemcpyAsync(ctx.hostInfo(1 + k), m[k]->dinfo.data(), sizeof(BuildInfo),
+                                 cudaMemcpyDeviceToHost, ctx.stream));
+  }
+  bool check() {
+    bool again = false;
+    for (int k = 0; k < 2; ++k)
+      if (m[k] != nullptr && m[k]->pending)
+        again = checkPending(ctx, *m[k], *mesh[k], *ctx.hostInfo(1 + k)) || again;
+    return again;
+  }
+};
+
 template <class S>
 QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
                       const QueryOptions& options) {
@@ -1094,37 +1525,43 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     checkLaunch();
     va = mapped.data();
   }
-  // The CPU backend's bound on the rounding of B's boxes mapped back into A's frame.
-  double eps = 0;
-  if (!rp.identity) {
-    const Aabb<double>& ba = A.info.bounds;
-    const Aabb<double>& bb = B.info.bounds;
-    double mag = std::fabs(rp.a_to_b.t.x) + std::fabs(rp.a_to_b.t.y) + std::fabs(rp.a_to_b.t.z);
-    for (int k = 0; k < 3; ++k)
-      mag += std::max(std::fabs(ba.lo[k]), std::fabs(ba.hi[k])) +
-             std::max(std::fabs(bb.lo[k]), std::fabs(bb.hi[k]));
-    eps = (16 * rp.orthonormal_defect + 64 * double(std::numeric_limits<S>::epsilon())) * mag +
-          std::numeric_limits<double>::min();
-  }
-  const HashView<S> av = A.view(), bv = B.view();
+  // The rounding bound of B's boxes mapped back into A's frame is finished on the device (it
+  // needs both meshes' bounds): eps = coef * (|t| + sum of both bounds' magnitudes) + DBL_MIN.
+  const double eps_coef =
+      rp.identity ? 0.0
+                  : 16 * rp.orthonormal_defect + 64 * double(std::numeric_limits<S>::epsilon());
+  const double eps_tmag =
+      std::fabs(rp.a_to_b.t.x) + std::fabs(rp.a_to_b.t.y) + std::fabs(rp.a_to_b.t.z);
   const auto una = static_cast<std::uint32_t>(na), unb = static_cast<std::uint32_t>(nb);
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
-  auto launch = [&](PairSink cand, PairSink out) {
+  const bool filter = usePlaneFilter(options);
+  auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
+    // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
+    const HashView<S> av = A.view(), bv = B.view();
+    bindInfo(s, A, &B);
     withTile([&](auto g, auto mb) {
       constexpr int G = decltype(g)::value;
       constexpr int MB = decltype(mb)::value;
       interCandidatesKernel<S, G, MB><<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
-          av, bv, va, una, unb, rp.identity, rp.b_to_a, eps, cand);
+          av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, cand);
     });
     checkLaunch();
     ctx.record(4);
+    PairSink in = cand;
+    if (filter) {
+      launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, surv);
+      in = surv;
+    }
+    ctx.record(5);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
       interExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
-          cand.pairs, cand.count, cand.capacity, va, av.t, bv.v, bv.t, out);
+          in.pairs, in.count, in.capacity, va, av.t, bv.v, bv.t, out);
     });
+    return filter;
   };
-  return runQuery(ctx, launch, bitsFor(na), bitsFor(nb), na + nb, options);
+  PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B}, {&a.mesh(), &b.mesh()}};
+  return runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb, options);
 }
 
 template <class S>
@@ -1136,10 +1573,12 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   CachedMesh<S>& M = acquire(ctx, mesh);
   ctx.record(1);
   const cudaStream_t s = ctx.stream;
-  const HashView<S> mv = M.view();
   const auto un = static_cast<std::uint32_t>(n);
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
-  auto launch = [&](PairSink cand, PairSink out) {
+  const bool filter = usePlaneFilter(options);
+  auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
+    const HashView<S> mv = M.view();
+    bindInfo<S>(s, M, nullptr);
     withTile([&](auto g, auto mb) {
       constexpr int G = decltype(g)::value;
       constexpr int MB = decltype(mb)::value;
@@ -1148,13 +1587,21 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
     });
     checkLaunch();
     ctx.record(4);
+    PairSink in = cand;
+    if (filter) {
+      launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, surv);
+      in = surv;
+    }
+    ctx.record(5);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
-      selfExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(cand.pairs, cand.count,
-                                                                  cand.capacity, mv.v, mv.t, out);
+      selfExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(in.pairs, in.count,
+                                                                  in.capacity, mv.v, mv.t, out);
     });
+    return filter;
   };
-  return runQuery(ctx, launch, bitsFor(n), bitsFor(n), n, options);
+  PendingBuilds<S> pending{ctx, {&M, nullptr}, {&mesh.mesh(), nullptr}};
+  return runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, options);
 }
 
 /// Serialises, initialises, and on a CUDA error drops every device buffer before rethrowing.
@@ -1211,6 +1658,43 @@ void markDeformed(const HashedMesh<S>& mesh) {
   std::lock_guard<std::mutex> lock(ctx.mutex);
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr)))
     if (m.owner == &mesh) m.force_vertices = true;
+}
+
+std::string deviceMemoryReport() {
+  Context& ctx = context();
+  std::lock_guard<std::mutex> lock(ctx.mutex);
+  std::string r;
+  auto add = [&](const char* name, std::size_t b) {
+    if (b == 0) return;
+    if (!r.empty()) r += ", ";
+    r += std::string(name) + " " + std::to_string(b);
+  };
+  std::size_t mesh[10] = {};
+  auto meshes = [&](const auto& list) {
+    for (const auto& m : list) {
+      mesh[0] += m.v.bytes();
+      mesh[1] += m.t.bytes();
+      mesh[2] += m.box.bytes();
+      mesh[3] += m.diam.bytes();
+      mesh[4] += m.level.bytes();
+      mesh[5] += m.entry_tri.bytes();
+      mesh[6] += m.cell_begin.bytes();
+      mesh[7] += m.cell_key.bytes();
+      mesh[8] += m.slots.bytes();
+      mesh[9] += m.dinfo.bytes();
+    }
+  };
+  meshes(ctx.meshes_f);
+  meshes(ctx.meshes_d);
+  const char* mesh_names[10] = {"v", "t", "box", "diam", "level", "entry_tri", "cell_begin",
+                                "cell_key", "slots", "info"};
+  for (int k = 0; k < 10; ++k) add(mesh_names[k], mesh[k]);
+  add("cub_temp", ctx.cub_temp.bytes());
+  add("mapped", ctx.mapped_f.bytes() + ctx.mapped_d.bytes());
+  add("cands (+ build sort scratch)", ctx.cands.bytes());
+  add("pairs (+ build counts)", ctx.pairs.bytes());
+  add("pairs_sorted/survivors (+ build size sort)", ctx.pairs_sorted.bytes());
+  return r;
 }
 
 std::size_t deviceBytesInUse() {

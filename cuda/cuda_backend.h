@@ -8,6 +8,12 @@
 // triangles, per-triangle box/diameter/level and cell table on the device. A new pose uploads
 // nothing but the relative pose; a new version() (updateVertices) uploads the vertices and
 // re-hashes on the device; a topology change (setMesh) uploads the triangles too and rebuilds.
+// A first build (and a rebuild after a topology change) reads the grid, the entry count and the
+// cell count back to size the arrays (1/8 slack). A re-hash of a mesh with compact 64-bit cell
+// keys reads nothing back: the grid stays on the device (the query kernels read it from
+// constant memory), the arrays keep their capacities, and the query's own read-back of its pair
+// counts also checks that the re-hash fitted; if not (more entries or cells, or keys that outgrew
+// the compact sort), the mesh is rebuilt with read-backs and the query reruns.
 //
 // Output: every pair is found (the device buffer grows and the query reruns on overflow, which
 // the device detects), then radix-sorted on the device: the result is sorted by (a, b), so it is
@@ -18,7 +24,14 @@
 //
 // Knobs (environment, for tests and tuning): KDET_FCL_CUDA_PAIR_CAPACITY=k caps the first pass's
 // candidate and pair buffers at k (forces the overflow path); KDET_FCL_CUDA_TILE=1|4|8|16|32
-// sets the lanes per query triangle of the candidate search (default 8, read once).
+// sets the lanes per query triangle of the candidate search (default 8, read once);
+// KDET_FCL_CUDA_PLANE_FILTER=0 turns off the plane filter between the candidate search and the
+// exact tests (default on, Predicate::Exact only; read at every query) and
+// KDET_FCL_CUDA_FILTER_MINBLOCKS=6 caps the filter kernel at 40 registers (default uncapped;
+// read once); KDET_FCL_CUDA_SYNC_REHASH=1 makes every re-hash read its sizes back (the round-3
+// flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell keys everywhere and
+// KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces its fallback); these
+// three are read at every build, for tests.
 //
 // Cache identity: an entry is reused when the HashedMesh address, version() and a fingerprint
 // (sizes, array addresses, 64 sampled vertices and triangles) all match. A new HashedMesh built
@@ -27,6 +40,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 #include "kdet_fcl/hashed_mesh.h"
 #include "kdet_fcl/query.h"
@@ -50,23 +64,34 @@ struct QueryProfile {
   double build_ms = 0;    ///< uploads + device re-hash of the meshes that changed (0: rigid)
   double query_ms = 0;    ///< pose mapping + candidate search + exact tests (all passes)
   double candidates_ms = 0;  ///< part of query_ms: pose mapping + candidate search (phase 1)
+  double filter_ms = 0;   ///< part of query_ms: the plane filter between the phases (0: off)
   double output_ms = 0;   ///< sort of the pairs + device->host copy
   double total_ms = 0;    ///< first event to last
   int passes = 0;         ///< query passes (> 1 after an output overflow)
   std::size_t pairs = 0;  ///< pairs found (before max_pairs truncation)
-  std::size_t candidates = 0;  ///< pairs that reached the exact test
+  std::size_t candidates = 0;  ///< candidate pairs of phase 1 (before the plane filter)
+  std::size_t exact_tests = 0;  ///< pairs that reached the exact test (after the plane filter)
+  int rehashes_async = 0;       ///< device re-hashes without a host read-back
+  int builds_with_readback = 0; ///< builds that read the sizes back (first build, new topology,
+                                ///< 128-bit keys, KDET_FCL_CUDA_SYNC_REHASH=1, or a fallback)
+  int rehash_fallbacks = 0;     ///< re-hashes that did not fit and were rebuilt (query rerun)
+  int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
 };
 void setProfiling(bool on);
 QueryProfile lastQueryProfile();
 
 /// Forces the next GPU query of `mesh` to treat it as deformed: re-upload its vertices and
 /// re-hash on the device (what updateVertices() costs on the GPU path). For benchmarks, which
-/// would otherwise also pay for the CPU re-hash of HashedMesh::updateVertices().
+/// can then time a deforming frame on the same HashedMesh objects without copying new vertices
+/// into them (updateVertices() itself only stores and validates them: the CPU re-hash is lazy).
 template <class S>
 void markDeformed(const HashedMesh<S>& mesh);
 
 /// Bytes of device memory the backend holds now (cached meshes + scratch buffers).
 std::size_t deviceBytesInUse();
+
+/// The same bytes, per buffer ("name bytes, ..."), for the benchmarks and tests.
+std::string deviceMemoryReport();
 
 /// Frees every cached mesh and scratch buffer (the next query re-uploads what it needs).
 void releaseDeviceMemory();

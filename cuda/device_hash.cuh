@@ -34,19 +34,24 @@ class DeviceBuffer {
   }
   ~DeviceBuffer() { release(); }
 
-  /// Makes room for n elements (with 1/8 slack when it must grow, so slowly growing inputs do
-  /// not reallocate every time).
-  void reserve(std::size_t n) {
+  /// Makes room for n elements (with 1/8 slack when it must grow and `slack`, so slowly growing
+  /// inputs do not reallocate every time; arrays whose size is fixed by the topology pass false).
+  void reserve(std::size_t n, bool slack = true) {
     if (n <= cap_ && p_ != nullptr) return;
     release();
-    const std::size_t want = (n == 0 ? 1 : n + n / 8);
+    const std::size_t want = (n == 0 ? 1 : (slack ? n + n / 8 : n));
     void* p = nullptr;
     CUDA_TRY(cudaMalloc(&p, want * sizeof(T)));
     p_ = static_cast<T*>(p);
     cap_ = want;
   }
+  /// Waits for the device first: with the re-hash free of host round-trips, kernels of the
+  /// current query may still use a scratch buffer that grows.
   void release() noexcept {
-    if (p_ != nullptr) (void)cudaFree(p_);
+    if (p_ != nullptr) {
+      (void)cudaDeviceSynchronize();
+      (void)cudaFree(p_);
+    }
     p_ = nullptr;
     cap_ = 0;
   }
@@ -60,8 +65,10 @@ class DeviceBuffer {
 };
 
 /// What one build of a hierarchy found: the grid (identical to the CPU's, see
-/// HierarchicalHash::build) and the sizes the host needs. Written on the device, read back once
-/// per (re)build.
+/// HierarchicalHash::build) and the sizes. Written on the device; each mesh keeps its own copy
+/// there, which the query kernels read through constant memory (c_info in cuda_backend.cu), so a
+/// re-hash needs no read-back. The host reads it once after a first build (to size the arrays)
+/// and, after a re-hash, together with the query's pair counts (to check the capacities).
 struct BuildInfo {
   detail::GridParams grid;
   detail::Aabb<double> bounds;
@@ -71,12 +78,28 @@ struct BuildInfo {
   int coord_bits;  ///< bits of a level-0 cell coordinate (every level's coordinates fit)
   int level_bits;  ///< bits of a level index
   int fits64;      ///< level_bits + 3 * coord_bits <= 64: the compact 64-bit key is exact
+  unsigned int entries;  ///< (cell, triangle) entries of this build (may exceed the capacity)
+  unsigned int cells;    ///< occupied cells of this build (may exceed the capacity)
+  int need_sync;   ///< re-hash without read-back only: the keys no longer fit the host's plan
+  int pad_;
 };
+
+/// The compact cell key: level and coordinates packed into cb bits per axis (exact and one-to-one
+/// when BuildInfo::fits64, for coordinates in [0, 2^cb), which every cell inside the bounds has).
+__host__ __device__ __forceinline__ unsigned long long compactKey(int level, std::int64_t x,
+                                                                  std::int64_t y, std::int64_t z,
+                                                                  int cb) {
+  return (static_cast<unsigned long long>(level) << (3 * cb)) |
+         (static_cast<unsigned long long>(x) << (2 * cb)) |
+         (static_cast<unsigned long long>(y) << cb) | static_cast<unsigned long long>(z);
+}
 
 /// Slot value of an empty open-addressing slot.
 constexpr unsigned long long kEmptySlot = ~0ull;
 
-/// A hierarchy on the device, as kernels see it (all pointers: device global memory).
+/// A hierarchy on the device, as kernels see it (all pointers: device global memory). The grid,
+/// bounds and level range are not here: they are computed on the device and read from the
+/// mesh's BuildInfo (passed separately, from constant memory).
 template <class S>
 struct HashView {
   const Vec3<S>* v;           ///< vertices, local frame
@@ -85,35 +108,43 @@ struct HashView {
   const double* diam;         ///< per triangle: enclosing diameter
   const std::uint32_t* entry_tri;   ///< triangle of each (cell, triangle) entry, grouped by cell
   const std::uint32_t* cell_begin;  ///< first entry of each cell; cell_begin[cells] = entries
-  const detail::CellKey* cell_key;  ///< full key of each cell
+  /// Full key of each cell: key_words = 1: the compact 64-bit key; 2: the 128-bit CellKey as
+  /// {hi, lo}. Either way a lookup compares the whole key.
+  const unsigned long long* cell_key;
   const unsigned long long* slots;  ///< open addressing: (hash >> 32) << 32 | cell, or empty
-  unsigned long long slot_mask;     ///< slots - 1 (a power of two minus one)
-  detail::GridParams grid;
-  detail::Aabb<double> bounds;
-  unsigned long long level_mask;
-  int top_level;
-  double d_max;
+  unsigned int slot_count;          ///< slots (any size; index = (low 32 hash bits * count) >> 32)
+  int key_words;
 };
 
 #if defined(__CUDACC__)
 
-/// The cell index of `key`, or -1 when no triangle occupies that cell. The 32 high hash bits in
-/// the slot only skip most mismatches cheaply; a match is confirmed on the full 128-bit key, so a
+/// The cell index of cell (L, x, y, z), or -1 when no triangle occupies that cell. The 32 high
+/// hash bits in the slot only skip most mismatches cheaply; a match is confirmed on the full key
+/// (the compact 64-bit key, exact for coordinates inside the bounds, or the 128-bit one), so a
 /// bucket or fingerprint collision can neither invent nor lose a candidate.
 template <class S>
-__device__ __forceinline__ int findCell(const HashView<S>& h, const detail::CellKey& key) {
+__device__ __forceinline__ int findCell(const HashView<S>& h, const BuildInfo& info, int L,
+                                        std::int64_t x, std::int64_t y, std::int64_t z) {
+  const detail::CellKey key = detail::makeCellKey(L, x, y, z);
   const unsigned long long hash = detail::hashCellKey(key);
   const unsigned int fp = static_cast<unsigned int>(hash >> 32);
-  unsigned long long i = hash & h.slot_mask;
+  unsigned int i = static_cast<unsigned int>(
+      (static_cast<unsigned long long>(static_cast<unsigned int>(hash)) * h.slot_count) >> 32);
+  const bool compact = h.key_words == 1;
+  const unsigned long long ck = compact ? compactKey(L, x, y, z, info.coord_bits) : 0ull;
   while (true) {
     const unsigned long long s = __ldg(h.slots + i);
     if (s == kEmptySlot) return -1;
     if (static_cast<unsigned int>(s >> 32) == fp) {
       const unsigned int c = static_cast<unsigned int>(s);
-      const detail::CellKey k{__ldg(&h.cell_key[c].hi), __ldg(&h.cell_key[c].lo)};
-      if (k == key) return static_cast<int>(c);
+      if (compact) {
+        if (__ldg(h.cell_key + c) == ck) return static_cast<int>(c);
+      } else if (__ldg(h.cell_key + 2 * std::size_t(c)) == key.hi &&
+                 __ldg(h.cell_key + 2 * std::size_t(c) + 1) == key.lo) {
+        return static_cast<int>(c);
+      }
     }
-    i = (i + 1) & h.slot_mask;
+    i = i + 1 == h.slot_count ? 0u : i + 1;
   }
 }
 
@@ -142,27 +173,27 @@ __device__ __forceinline__ detail::Aabb<double> boxOf(const HashView<S>& h, std:
 /// lookups are repeated in every lane, so smaller tiles suit lightly loaded cells. All arguments
 /// must be tile-uniform; every lane of the tile must call.
 template <class S, class Tile, class Accept, class Emit>
-__device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h,
+__device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const BuildInfo& info,
                                                     const detail::Aabb<double>& qbox, double dq,
                                                     const Tile& tile, Accept&& accept,
                                                     Emit&& emit) {
   constexpr unsigned int G = Tile::num_threads();
   const unsigned int lane = tile.thread_rank();
-  const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, h.bounds);
+  const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, info.bounds);
   if (detail::isEmpty(clipped)) return;
   // Cells list their triangles by decreasing sizeKey (cuda_backend.cu); every size rule needs
   // d_j >= d_query, so the scan of a cell stops at the first entry of a smaller sizeKey.
   const unsigned int qkey = sizeKeyOf(dq);
-  for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
-    if (!((h.level_mask >> L) & 1ull)) continue;
+  for (int L = detail::levelFor(dq, info.grid); L <= info.top_level; ++L) {
+    if (!((info.level_mask >> L) & 1ull)) continue;
     const double scale = detail::levelScale(L);
-    const detail::CellRange r = detail::cellRange(clipped, L, h.grid);
+    const detail::CellRange r = detail::cellRange(clipped, L, info.grid);
     // Every lane computes the same lookups (cheap next to the entry scans; a variant in which
     // the lanes probed different cells of the range and shuffled the hits was measured slower).
     for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
       for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
         for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
-          const int c = findCell(h, detail::makeCellKey(L, x, y, z));  // same in every lane
+          const int c = findCell(h, info, L, x, y, z);  // same in every lane
           if (c < 0) continue;
           const std::uint32_t begin = __ldg(h.cell_begin + c), end = __ldg(h.cell_begin + c + 1);
           for (std::uint32_t base = begin; base < end; base += G) {
@@ -175,7 +206,7 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h,
               if (!smaller && accept(j, dj)) {
                 const detail::Aabb<double> eb = boxOf(h, j);
                 if (detail::boxesOverlap(qbox, eb) &&
-                    detail::isCanonicalCell(qbox, eb, scale, h.grid, x, y, z))
+                    detail::isCanonicalCell(qbox, eb, scale, info.grid, x, y, z))
                   emit(j);
               }
             }

@@ -18,6 +18,8 @@
 #   TARGETS     build only these targets (space-separated; default: everything)
 #   CTEST_ALL   0: skip the run of the whole suite after the CUDA label (default 1)
 #   SANITIZER   1: also run compute-sanitizer memcheck and racecheck on a small CUDA test scene
+#   PRECISION_BENCH  1: also run benchmarks/precision_bench (the speed/accuracy trade of the
+#               predicate modes on the CPU and the GPU; outputs in OUT/precision)
 # Exit status: 0 when the build and both test runs pass, else non-zero.
 set -uo pipefail
 
@@ -162,6 +164,13 @@ if [[ "${GPU_BENCH:-0}" == 1 ]]; then
   "$BUILD_DIR/benchmarks/gpu_bench" ${GPU_BENCH_ARGS:-} --csv "$OUT/gpu_bench.csv" \
     >"$OUT/gpu_bench.log" 2>&1 || bench_rc=1
   cat "$OUT/gpu_bench.log"
+fi
+
+if [[ "${PRECISION_BENCH:-0}" == 1 ]]; then
+  log "precision_bench (log: $OUT/precision_bench.log)"
+  "$BUILD_DIR/benchmarks/precision_bench" ${PRECISION_BENCH_ARGS:-} --out "$OUT/precision" \
+    >"$OUT/precision_bench.log" 2>&1 || bench_rc=1
+  tail -n 30 "$OUT/precision_bench.log"
 fi
 
 if ((cuda_rc != 0 || all_rc != 0 || san_rc != 0 || bench_rc != 0)); then

@@ -1,7 +1,10 @@
 #include "kdet_fcl/hashed_mesh.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
+#include <mutex>
 #include <type_traits>
 #include <string>
 #include <utility>
@@ -12,13 +15,19 @@
 namespace kdet_fcl {
 
 template <class S>
+struct HashedMesh<S>::Lazy {
+  std::mutex mutex;               // held while the CPU hash is rebuilt
+  std::atomic<bool> fresh{false};  // the CPU hash matches mesh_
+};
+
+template <class S>
 HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int threads)
     : mesh_(std::move(mesh)), threads_(threads) {
   mesh_.validate(false, "HashedMesh");
   setPose(pose);
   hash_ = std::make_unique<detail::HierarchicalHash<S>>();
-  spare_ = std::make_unique<detail::HierarchicalHash<S>>();
-  rehash(mesh_.vertices, mesh_.triangles);
+  lazy_ = std::make_unique<Lazy>();
+  geometryChanged();
 }
 
 template <class S>
@@ -74,22 +83,29 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
   TriangleMesh<S> probe;  // validate the new coordinates before touching the mesh
   probe.vertices = vertices;
   probe.validate(false, "updateVertices");
-  rehash(probe.vertices, mesh_.triangles);
   mesh_.vertices = std::move(probe.vertices);
+  geometryChanged();
 }
 
 template <class S>
 void HashedMesh<S>::setMesh(TriangleMesh<S> mesh) {
   mesh.validate(false, "setMesh");
-  rehash(mesh.vertices, mesh.triangles);
   mesh_ = std::move(mesh);
+  geometryChanged();
 }
 
 template <class S>
-void HashedMesh<S>::rehash(const std::vector<Vec3<S>>& vertices,
-                           const std::vector<Triangle>& triangles) {
-  spare_->build(vertices, triangles, threads_);
-  std::swap(hash_, spare_);
+void HashedMesh<S>::geometryChanged() {
+  // noexcept in effect: nothing below allocates or throws.
+  const double inf = std::numeric_limits<double>::infinity();
+  detail::Aabb<double> b{{inf, inf, inf}, {-inf, -inf, -inf}};
+  for (const Vec3<S>& p : mesh_.vertices)
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = std::min(b.lo[a], double(p[a]));
+      b.hi[a] = std::max(b.hi[a], double(p[a]));
+    }
+  bounds_ = b;
+  lazy_->fresh.store(false, std::memory_order_release);
   // Versions are unique in the process, so a cache keyed by (address, version) can never mistake
   // a new mesh at a freed mesh's address for the old one.
   static std::atomic<std::uint64_t> next_version{1};
@@ -97,10 +113,27 @@ void HashedMesh<S>::rehash(const std::vector<Vec3<S>>& vertices,
 }
 
 template <class S>
+const detail::HierarchicalHash<S>& HashedMesh<S>::hash() const {
+  if (!lazy_->fresh.load(std::memory_order_acquire)) {
+    std::lock_guard<std::mutex> lock(lazy_->mutex);
+    if (!lazy_->fresh.load(std::memory_order_relaxed)) {
+      // Rebuilt in place (reusing its buffers). On an exception the hash is left empty and
+      // stale, so the next call rebuilds it; the mesh itself is untouched.
+      hash_->build(mesh_.vertices, mesh_.triangles, threads_);
+      lazy_->fresh.store(true, std::memory_order_release);
+    }
+  }
+  return *hash_;
+}
+
+template <class S>
+bool HashedMesh<S>::cpuHashFresh() const {
+  return lazy_->fresh.load(std::memory_order_acquire);
+}
+
+template <class S>
 HierarchyStats HashedMesh<S>::stats() const {
-  HierarchyStats st = hash_->stats();
-  st.memory_bytes += spare_->memoryBytes();  // the buffers kept for the next rebuild
-  return st;
+  return hash().stats();
 }
 
 template class HashedMesh<float>;

@@ -343,9 +343,11 @@ TEST(OutOfMemory, HashedMeshAllocationFailureIsAnException) {
 
 /// README: "On error, a HashedMesh keeps its previous state." setMesh and updateVertices are run
 /// under address-space limits growing in 2 MiB steps (each in a fresh child), from "fails at
-/// once" to "succeeds", so that the failure hits every allocation on the way, inside the rebuild
-/// too. After each failure the object must still hold the old geometry and answer queries on it.
-/// (Regression: the rebuild used to clear the old hash before allocating the new one.)
+/// once" to "succeeds", so that the failure hits every allocation on the way. The CPU re-hash is
+/// lazy (the first CPU query after a change runs it; prepareCpuHash() here), so a failure either
+/// hits the mutation itself, which must then leave the old geometry answering queries as before,
+/// or the re-hash, which must leave the new geometry stored with a stale hash that the next call
+/// rebuilds (test_hierarchy.cpp checks the answers after such a failure on a smaller mesh).
 TEST(OutOfMemory, AFailedRebuildKeepsThePreviousState) {
   if (kSanitized) GTEST_SKIP() << "RLIMIT_AS and AddressSanitizer do not mix";
   // Large blocks always from mmap (no dynamic threshold): a freed vector leaves no reusable heap.
@@ -371,8 +373,18 @@ TEST(OutOfMemory, AFailedRebuildKeepsThePreviousState) {
             h.updateVertices(moved);
           else
             h.setMesh(std::move(replacement));
+          h.prepareCpuHash();
         } catch (const std::bad_alloc&) {
           unlimitAddressSpace();
+          const bool changed =
+              vertices_only ? std::memcmp(h.mesh().vertices.data(), moved.data(),
+                                          moved.size() * sizeof(Vec3<double>)) == 0
+                            : h.numTriangles() == big.triangles.size();
+          if (changed) {  // the re-hash failed: stale, and rebuilt by the next call
+            if (h.cpuHashFresh()) return int(kStateChanged);
+            h.prepareCpuHash();
+            return int(h.cpuHashFresh() ? kOk : kStateChanged);
+          }
           const bool same = (vertices_only ? std::memcmp(h.mesh().vertices.data(), big.vertices.data(),
                                                          big.vertices.size() * sizeof(Vec3<double>)) == 0
                                            : h.numTriangles() == small.triangles.size()) &&
@@ -389,7 +401,9 @@ TEST(OutOfMemory, AFailedRebuildKeepsThePreviousState) {
     std::printf("%s under growing memory limits: %d clean failures, %d left a changed state, "
                 "%d killed by a signal, then success: %d\n",
                 vertices_only ? "updateVertices" : "setMesh", failures, broken, signals, successes);
-    EXPECT_GT(failures + broken + signals, 0) << "the limit never bit";
+    // A same-size re-hash reuses every buffer of the last one, so updateVertices may find all
+    // the memory it needs (its copy of the vertices can come from free heap).
+    if (!vertices_only) EXPECT_GT(failures + broken + signals, 0) << "the limit never bit";
     EXPECT_EQ(broken, 0) << (vertices_only ? "updateVertices" : "setMesh")
                          << ": a failed rebuild left the HashedMesh changed";
     EXPECT_EQ(signals, 0) << "a failed rebuild crashed";

@@ -321,6 +321,299 @@ TEST(CudaQuery, InexactPredicatesMatchTheCpuToo) {
   }
 }
 
+/// Two triangulated sheets in (nearly) the same plane: sheet A flat at z = 0, sheet B shifted by a
+/// fraction of a cell, its vertices at z = 0 exactly, one or a few ulps off, 1e-9 off, or clearly
+/// off (a mix per vertex), so that most candidate pairs are touching, coplanar or within
+/// rounding of the other's plane: the cases where a plane-side filter that drops too much would
+/// lose true pairs. `tilt` adds a slope to sheet B so that its triangles cross A's plane.
+template <class S>
+TriangleMesh<S> nearCoplanarSheets(int n, bool tilt, std::uint64_t seed, bool sheet_a = true,
+                                   bool sheet_b = true) {
+  std::mt19937_64 rng(seed);
+  TriangleMesh<S> m;
+  const S h = S(1) / S(n);
+  auto offset = [&](S base) {
+    switch (rng() % 7) {
+      case 0: return base;
+      case 1: return std::nextafter(base, S(1));
+      case 2: return std::nextafter(base, S(-1));
+      case 3: return std::nextafter(std::nextafter(base, S(1)), S(1));
+      case 4: return base + S(1e-9);
+      case 5: return base - S(1e-9);
+      default: return base + S(rng() % 2 ? 0.01 : -0.01);
+    }
+  };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const S x = S(i) * h, y = S(j) * h;
+      if (sheet_a) {
+        m.addTriangle({x, y, 0}, {x + h, y, 0}, {x, y + h, 0});
+        m.addTriangle({x + h, y, 0}, {x + h, y + h, 0}, {x, y + h, 0});
+      }
+      if (sheet_b) {
+        const S bx = x + S(0.5) * h, by = y + S(0.25) * h;
+        auto z = [&](S px, S py) {
+          const S base = tilt ? (px - S(0.5)) * S(1e-6) + (py - S(0.5)) * S(3e-7) : S(0);
+          return offset(base);
+        };
+        m.addTriangle({bx, by, z(bx, by)}, {bx + h, by, z(bx + h, by)},
+                      {bx, by + h, z(bx, by + h)});
+        m.addTriangle({bx + h, by, z(bx + h, by)}, {bx + h, by + h, z(bx + h, by + h)},
+                      {bx, by + h, z(bx, by + h)});
+      }
+    }
+  return m;
+}
+
+TYPED_TEST(CudaQueryTyped, NearCoplanarAndTouchingPairsSurviveThePlaneFilter) {
+  SKIP_WITHOUT_DEVICE();
+  using S = TypeParam;
+  std::size_t total = 0;
+#if KDET_FCL_TEST_HAVE_CUDA
+  cuda::setProfiling(true);
+#endif
+  for (bool tilt : {false, true})
+    for (std::uint64_t seed : {1u, 2u}) {
+      const std::string what = std::string(tilt ? "tilted" : "flat") + " seed " +
+                               std::to_string(seed);
+      HashedMesh<S> a(nearCoplanarSheets<S>(30, tilt, seed, true, false));
+      HashedMesh<S> b(nearCoplanarSheets<S>(30, tilt, seed, false, true));
+      HashedMesh<S> both(nearCoplanarSheets<S>(30, tilt, seed));
+      total += expectSameInter(a, b, what + " inter");
+      total += expectSameInter(b, a, what + " inter, swapped");
+      total += expectSameSelf(both, what + " self");
+#if KDET_FCL_TEST_HAVE_CUDA
+      const cuda::QueryProfile p = cuda::lastQueryProfile();
+      EXPECT_LE(p.exact_tests, p.candidates) << what;
+#endif
+      std::mt19937_64 rng(seed);
+      b.setPose(kdet_test::randomPose<S>(rng, -1e-6, 1e-6));
+      a.setPose(b.pose());  // the same pose: mapped coordinates are rounded, planes still close
+      total += expectSameInter(a, b, what + " posed");
+      for (Predicate p : {Predicate::Double, Predicate::Float}) {
+        expectSameInter(a, b, what + " plain predicate", p);
+        expectSameSelf(both, what + " plain predicate self", p);
+      }
+    }
+#if KDET_FCL_TEST_HAVE_CUDA
+  cuda::setProfiling(false);
+#endif
+  EXPECT_GT(total, 1000u);
+}
+
+TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
+  // The filter can be switched off per query (KDET_FCL_CUDA_PLANE_FILTER=0); both ways, and with
+  // tiny buffers (every buffer overflows, the survivors' too), the pairs are the CPU's.
+  SKIP_WITHOUT_DEVICE();
+  HashedMesh<double> cloth(makeDrapedCloth<double>(80, 4.0, 1.0, 0.03, 1.0));
+  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 48, 24));
+  HashedMesh<float> sheets(nearCoplanarSheets<float>(24, true, 7));
+  const auto cpu_inter = sorted(intersectMeshes(cloth, sphere).pairs);
+  const auto cpu_self = sorted(intersectSelf(cloth).pairs);
+  const auto cpu_sheets = sorted(intersectSelf(sheets).pairs);
+  ASSERT_GT(cpu_inter.size(), 10u);
+  for (const char* filter : {"0", "1"})
+    for (const char* cap : {"", "2", "50"}) {
+      ASSERT_EQ(setenv("KDET_FCL_CUDA_PLANE_FILTER", filter, 1), 0);
+      ASSERT_EQ(setenv("KDET_FCL_CUDA_PAIR_CAPACITY", cap, 1), 0);
+      const std::string what = std::string("filter ") + filter + " cap '" + cap + "'";
+#if KDET_FCL_TEST_HAVE_CUDA
+      cuda::setProfiling(true);
+#endif
+      EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs, cpu_inter) << what;
+#if KDET_FCL_TEST_HAVE_CUDA
+      const cuda::QueryProfile p = cuda::lastQueryProfile();
+      if (*filter == '0') EXPECT_EQ(p.exact_tests, p.candidates) << what;
+      else EXPECT_LT(p.exact_tests, p.candidates) << what;
+      cuda::setProfiling(false);
+#endif
+      EXPECT_EQ(intersectSelf(cloth, on(Backend::Cuda)).pairs, cpu_self) << what;
+      EXPECT_EQ(intersectSelf(sheets, on(Backend::Cuda)).pairs, cpu_sheets) << what;
+    }
+  unsetenv("KDET_FCL_CUDA_PAIR_CAPACITY");
+  unsetenv("KDET_FCL_CUDA_PLANE_FILTER");
+}
+
+TEST(CudaQuery, PlaneFilterCountsAndBytesPerTriangle) {
+  // Not a timing: reports how many candidates reach the exact test and the device memory per
+  // triangle on the UNC cloth ball (or a draped cloth without the data), and checks the counts'
+  // consistency.
+  SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  const std::string f92 = dataFile("unc/cloth-ball/cloth_ball92.ply");
+  HashedMesh<float> m(f92.empty() ? makeDrapedCloth<float>(200, 4.f, 1.f, 0.03f, 1.f)
+                                  : readMesh<float>(f92));
+  cuda::releaseDeviceMemory();
+  cuda::setProfiling(true);
+  const QueryResult r = intersectSelf(m, on(Backend::Cuda));
+  const cuda::QueryProfile p = cuda::lastQueryProfile();
+  cuda::setProfiling(false);
+  EXPECT_EQ(r.pairs, sorted(intersectSelf(m).pairs));
+  EXPECT_LE(p.exact_tests, p.candidates);
+  EXPECT_GE(p.exact_tests, r.pairs.size());
+  const double per_tri = double(cuda::deviceBytesInUse()) / double(m.numTriangles());
+  std::cout << "[ filter   ] " << (f92.empty() ? "draped cloth" : "cloth_ball92") << ": "
+            << m.numTriangles() << " triangles, " << p.candidates << " candidates, "
+            << p.exact_tests << " exact tests, " << r.pairs.size() << " pairs; device "
+            << cuda::deviceBytesInUse() << " B = " << per_tri << " B/triangle\n"
+            << "[ memory   ] " << cuda::deviceMemoryReport() << "\n";
+#endif
+}
+
+TEST(CudaQuery, CompactAndFullCellKeysBothMatchTheCpu) {
+  // The same meshes hashed with compact 64-bit cell keys (the default where they are exact) and
+  // with 128-bit keys (KDET_FCL_CUDA_FULL_KEYS=1, forced): both compare whole keys, so both give
+  // the CPU's pairs, through first builds and re-hashes alike.
+  SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 1.0));
+  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
+  HashedMesh<float> soup(makeRandomSoup<float>(4000, 2.f, 1e-3f, 0.2f, 21));
+  for (const char* full : {"0", "1"}) {
+    ASSERT_EQ(setenv("KDET_FCL_CUDA_FULL_KEYS", full, 1), 0);
+    cuda::releaseDeviceMemory();  // the key width is chosen at a build
+    const std::string what = std::string("full keys ") + full;
+    EXPECT_GT(expectSameInter(cloth, sphere, what + " inter"), 0u);
+    expectSameInter(sphere, cloth, what + " inter, swapped");
+    EXPECT_GT(expectSameSelf(cloth, what + " self"), 0u);
+    expectSameSelf(soup, what + " soup self");
+    for (double t : {0.9, 0.95, 1.0}) {
+      cloth.updateVertices(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, t).vertices);
+      expectSameInter(cloth, sphere, what + " inter, t = " + std::to_string(t));
+      expectSameSelf(cloth, what + " self, t = " + std::to_string(t));
+    }
+  }
+  unsetenv("KDET_FCL_CUDA_FULL_KEYS");
+  cuda::releaseDeviceMemory();
+#endif
+}
+
+TEST(CudaQuery, RehashWithoutReadBackAndItsFallbacks) {
+  // A deformed mesh is re-hashed on the device with no host read-back (capacities of the last
+  // build, sizes read by the kernels through pointers); the query's own read-back then checks
+  // that it fitted. Forced overflows (KDET_FCL_CUDA_REHASH_CAP) and a deformation whose keys no
+  // longer fit the compact sort must fall back to a build with read-backs and rerun the query,
+  // with the CPU's pairs every time.
+  SKIP_WITHOUT_DEVICE();
+  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
+#if KDET_FCL_TEST_HAVE_CUDA
+  cuda::setProfiling(true);
+  HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 0.0));
+  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
+  auto profile = [] { return cuda::lastQueryProfile(); };
+  expectSameInter(cloth, sphere, "first build");
+  EXPECT_EQ(profile().builds_with_readback, 2);
+  EXPECT_EQ(profile().rehashes_async, 0);
+  for (double t : {0.3, 0.7, 1.0}) {
+    const std::string what = "t = " + std::to_string(t);
+    cloth.updateVertices(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, t).vertices);
+    expectSameSelf(cloth, what + " self");
+    EXPECT_EQ(profile().rehashes_async, 1) << what;  // attempted (a fallback counts too)
+    EXPECT_EQ(profile().builds_with_readback, profile().rehash_fallbacks) << what;
+    // Both meshes deformed before one inter query: two re-hashes pending at once.
+    cuda::markDeformed(cloth);
+    cuda::markDeformed(sphere);
+    expectSameInter(cloth, sphere, what + " inter, both re-hashed");
+    EXPECT_EQ(profile().rehashes_async, 2) << what;
+  }
+  // Forced overflow of the entries and cells (the kernels must stay inside the arrays), then
+  // the fallback, for a self query and for both sides of an inter query.
+  for (const char* cap : {"1", "100", "500"}) {
+    ASSERT_EQ(setenv("KDET_FCL_CUDA_REHASH_CAP", cap, 1), 0);
+    const std::string what = std::string("cap ") + cap;
+    cuda::markDeformed(cloth);
+    expectSameSelf(cloth, what + " self");
+    EXPECT_EQ(profile().rehash_fallbacks, 1) << what;
+    EXPECT_GE(profile().passes, 2) << what;
+    cuda::markDeformed(cloth);
+    cuda::markDeformed(sphere);
+    expectSameInter(cloth, sphere, what + " inter");
+    EXPECT_EQ(profile().rehash_fallbacks, 2) << what;
+  }
+  unsetenv("KDET_FCL_CUDA_REHASH_CAP");
+  // The keys outgrow the compact sort: one triangle of a soup moved a million units away
+  // (same topology) needs far more coordinate bits, then the 128-bit keys (always with
+  // read-backs), then back to a small grid (compact again after one build with read-backs).
+  TriangleMesh<double> base = makeRandomSoup<double>(3000, 2.0, 1e-3, 0.1, 31);
+  HashedMesh<double> soup(base);
+  HashedMesh<double> other(makeRandomSoup<double>(2000, 2.0, 1e-3, 0.1, 32));
+  expectSameSelf(soup, "soup");
+  std::vector<Vec3<double>> far = base.vertices;
+  for (int k = 0; k < 3; ++k) far[base.triangles[0][k]] = far[base.triangles[0][k]] + Vec3<double>{1e6, 1e6, 1e6};
+  far[base.triangles[0][0]] = far[base.triangles[0][0]] + Vec3<double>{5e5, 0, 0};
+  soup.updateVertices(far);
+  expectSameSelf(soup, "soup, one triangle far away");
+  EXPECT_EQ(profile().rehash_fallbacks, 1);
+  expectSameInter(soup, other, "far soup vs soup");
+  soup.updateVertices(base.vertices);
+  expectSameSelf(soup, "soup, back");
+  EXPECT_EQ(profile().builds_with_readback, 1);  // the last build used 128-bit keys
+  cuda::markDeformed(soup);
+  expectSameSelf(soup, "soup, back, re-hashed");
+  EXPECT_EQ(profile().rehashes_async, 1);
+  EXPECT_EQ(profile().rehash_fallbacks, 0);
+  cuda::setProfiling(false);
+#endif
+}
+
+TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
+  // A re-hash without read-back runs as a CUDA graph (captured at the first, replayed while the
+  // sizes and buffers stay, captured again when they change, e.g. after a fallback grew the
+  // arrays); KDET_FCL_CUDA_REHASH_GRAPH=0 enqueues the same work directly. Same pairs as the
+  // CPU either way.
+  SKIP_WITHOUT_DEVICE();
+  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
+#if KDET_FCL_TEST_HAVE_CUDA
+  cuda::setProfiling(true);
+  for (const char* graph : {"1", "0"}) {
+    ASSERT_EQ(setenv("KDET_FCL_CUDA_REHASH_GRAPH", graph, 1), 0);
+    HashedMesh<double> cloth(makeDrapedCloth<double>(50, 4.0, 1.0, 0.03, 1.0));
+    HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
+    expectSameInter(cloth, sphere, "first build");
+    int step = 0;
+    for (double t : {0.9, 0.8, 0.7, 0.8, 0.9, 1.0}) {
+      const std::string what = std::string("graph ") + graph + ", t = " + std::to_string(t);
+      if (++step == 4) ASSERT_EQ(setenv("KDET_FCL_CUDA_REHASH_CAP", "100", 1), 0);
+      if (step == 5) unsetenv("KDET_FCL_CUDA_REHASH_CAP");
+      cloth.updateVertices(makeDrapedCloth<double>(50, 4.0, 1.0, 0.03, t).vertices);
+      expectSameSelf(cloth, what + " self");
+      const cuda::QueryProfile p = cuda::lastQueryProfile();
+      EXPECT_EQ(p.rehashes_async, 1) << what;
+      EXPECT_EQ(p.rehash_graphs, *graph == '1' ? 1 : 0) << what;
+      if (step == 4) EXPECT_EQ(p.rehash_fallbacks, 1) << what;
+      cuda::markDeformed(sphere);
+      expectSameInter(cloth, sphere, what + " inter");
+      expectSameInter(sphere, cloth, what + " inter, swapped");
+    }
+  }
+  unsetenv("KDET_FCL_CUDA_REHASH_GRAPH");
+  cuda::setProfiling(false);
+#endif
+}
+
+TEST(CudaQuery, DeviceBytesPerTriangleOnACloth) {
+  // Not a timing: the device memory after one self query of a draped cloth (a first build) and
+  // after a re-hash, per triangle, with the breakdown; the bound is issue 4's target.
+  SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  HashedMesh<float> m(makeDrapedCloth<float>(200, 4.f, 1.f, 0.03f, 1.f));
+  cuda::releaseDeviceMemory();
+  EXPECT_EQ(intersectSelf(m, on(Backend::Cuda)).pairs, sorted(intersectSelf(m).pairs));
+  const double first = double(cuda::deviceBytesInUse()) / double(m.numTriangles());
+  cuda::markDeformed(m);
+  EXPECT_EQ(intersectSelf(m, on(Backend::Cuda)).pairs, sorted(intersectSelf(m).pairs));
+  const double rehash = double(cuda::deviceBytesInUse()) / double(m.numTriangles());
+  std::cout << "[ memory   ] draped cloth " << m.numTriangles() << " triangles: " << first
+            << " B/triangle after the first build, " << rehash << " after a re-hash\n"
+            << "[ memory   ] " << cuda::deviceMemoryReport() << "\n";
+  EXPECT_LE(first, 256.0);
+  EXPECT_LE(rehash, 256.0);
+  cuda::releaseDeviceMemory();
+#endif
+}
+
 TEST(CudaQuery, AutoPicksTheGpuForLargeQueries) {
   SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(150, 4.0, 1.0, 0.03, 1.0));  // 45k triangles

@@ -16,7 +16,7 @@
 ///   kdet_fcl::collide(&obj, &other, request, result);
 ///   mesh->beginUpdateModel();                 // next frame of a deforming mesh
 ///   mesh->updateSubModel(next_points);
-///   mesh->endUpdateModel();                   // FCL refit (MeshMode::Fcl) + kDet re-hash
+///   mesh->endUpdateModel();                   // FCL refit (MeshMode::Fcl); kDet re-hashes lazily
 /// \endcode
 /// Call these methods on the Mesh itself: through a `BVHModel<OBBRSS<S>>*` FCL's versions run and
 /// kDet learns nothing; call notifyDeformed() afterwards in that case (also after writing into
@@ -98,7 +98,8 @@ class Mesh : public fcl::BVHModel<fcl::OBBRSS<S>> {
                       const fcl::Vector3<S>& p3);
   int replaceSubModel(const std::vector<fcl::Vector3<S>>& ps);
   /// FCL's endReplaceModel (MeshMode::Fcl) or only its checks (KdetOnly), then
-  /// computeLocalAABB() and a kDet re-hash.
+  /// computeLocalAABB(); kDet's hash is marked stale and rebuilt by the next query that needs it
+  /// (the CPU re-hash, or the device re-hash on the CUDA backend).
   int endReplaceModel(bool refit = true, bool bottomup = true);
 
   // ---- FCL's update family (keeps the previous frame in prev_vertices). ----
@@ -108,7 +109,7 @@ class Mesh : public fcl::BVHModel<fcl::OBBRSS<S>> {
                      const fcl::Vector3<S>& p3);
   int updateSubModel(const std::vector<fcl::Vector3<S>>& ps);
   /// FCL's endUpdateModel (MeshMode::Fcl) or only its checks (KdetOnly), then
-  /// computeLocalAABB() and a kDet re-hash.
+  /// computeLocalAABB(); kDet's hash is marked stale and rebuilt by the next query that needs it.
   int endUpdateModel(bool refit = true, bool bottomup = true);
 
   MeshMode mode() const { return mode_; }

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "kdet_fcl/detail/aabb.h"
 #include "kdet_fcl/triangle_mesh.h"
 #include "kdet_fcl/vec3.h"
 
@@ -22,7 +23,7 @@ struct HierarchyStats {
   std::size_t cells = 0;         ///< occupied cells over all levels
   std::size_t entries = 0;       ///< (cell, triangle) entries
   std::size_t max_cell_load = 0; ///< most triangles in one cell
-  std::size_t memory_bytes = 0;  ///< bytes held by the hash and its rebuild buffers (not the mesh)
+  std::size_t memory_bytes = 0;  ///< bytes held by the CPU hash and its rebuild buffers (not the mesh)
 };
 
 namespace detail {
@@ -32,14 +33,19 @@ class HierarchicalHash;
 
 /// A mesh hashed in its own frame plus a rigid pose.
 ///  - Rigid motion: setPose() costs nothing else; the hash is never rebuilt for a new pose.
-///  - Deformation (same topology): updateVertices() re-hashes in O(n).
-///  - Topology change (fracture, insertion, deletion): setMesh() rebuilds in O(n).
-/// Not thread-safe for mutation; concurrent const queries are fine.
+///  - Deformation (same topology): updateVertices() validates and stores the new positions;
+///    the CPU hash is rebuilt in O(n) by the first CPU query that needs it (lazily, so a mesh
+///    queried only on the GPU never pays for a CPU re-hash).
+///  - Topology change (fracture, insertion, deletion): setMesh(), likewise.
+/// Not thread-safe for mutation (setPose, updateVertices, setMesh, assignment) while any other
+/// call is in flight. Concurrent const calls (queries, hash(), stats()) from several threads are
+/// safe, also right after a mutation: the first one rebuilds the CPU hash under a lock, the
+/// others wait for it; once the hash is current, a query only checks an atomic flag.
 template <class S>
 class HashedMesh {
  public:
-  /// Validates the mesh (throws InvalidInputError) and builds the hash. An empty mesh is allowed
-  /// (it intersects nothing).
+  /// Validates the mesh (throws InvalidInputError). The CPU hash is built on first use (see
+  /// hash()). An empty mesh is allowed (it intersects nothing).
   explicit HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose = Transform<S>::identity(),
                       int threads = 0);
   ~HashedMesh();
@@ -53,12 +59,13 @@ class HashedMesh {
   void setPose(const Transform<S>& pose);
   const Transform<S>& pose() const { return pose_; }
 
-  /// New vertex positions, same count and topology; re-hashes. Throws InvalidInputError (and
-  /// leaves the mesh unchanged) on a wrong count or a non-finite coordinate.
+  /// New vertex positions, same count and topology. Throws InvalidInputError (and leaves the
+  /// mesh unchanged) on a wrong count or a non-finite coordinate. Marks the CPU hash stale: it is
+  /// rebuilt by the next CPU query (or prepareCpuHash()), not here.
   void updateVertices(const std::vector<Vec3<S>>& vertices);
 
-  /// Replaces the whole mesh (topology change); rebuilds. Validates first; on error the old mesh
-  /// is kept.
+  /// Replaces the whole mesh (topology change). Validates first; on error the old mesh is kept.
+  /// Marks the CPU hash stale, like updateVertices().
   void setMesh(TriangleMesh<S> mesh);
 
   const TriangleMesh<S>& mesh() const { return mesh_; }
@@ -68,23 +75,44 @@ class HashedMesh {
   /// setPose), unique within the process (no two meshes ever share one), and increasing.
   std::uint64_t version() const { return version_; }
 
+  /// The CPU hierarchy's shape and memory. Builds the CPU hash if it is stale (like a query).
   HierarchyStats stats() const;
 
   /// The tolerance on |R^T R - I| and |det R - 1| that setPose() accepts.
   static double orthonormalTolerance();
 
-  /// Internal: the hierarchy (used by the backends and the analysis).
-  const detail::HierarchicalHash<S>& hash() const { return *hash_; }
+  /// Builds the CPU hash now if the geometry changed since it was last built (otherwise the first
+  /// CPU query does it): for callers that want the O(n) re-hash outside their queries, e.g. to
+  /// time it. Throws what hash() throws.
+  void prepareCpuHash() const { (void)hash(); }
+  /// Whether the CPU hash is current (false from a geometry change until the next CPU query,
+  /// stats() or prepareCpuHash()).
+  bool cpuHashFresh() const;
+
+  /// The box of the mesh's vertices in its own frame (lo > hi when it has none), kept current by
+  /// every geometry change without building the hash. It contains every triangle.
+  const detail::Aabb<double>& localBounds() const { return bounds_; }
+
+  /// Internal: the CPU hierarchy (used by the CPU backend and the analysis). Built here on first
+  /// use after a geometry change (thread-safe, see the class comment). If that build fails
+  /// (std::bad_alloc, or InvalidInputError for a mesh too large for 32-bit entry indices) the
+  /// exception propagates to the caller (the query), and the mesh, its pose and version are
+  /// untouched and still valid: the hash stays stale and the next call tries again.
+  const detail::HierarchicalHash<S>& hash() const;
 
  private:
-  /// Builds the hash of (vertices, triangles) into the spare structure and swaps it in: if the
-  /// build throws (out of memory), the current mesh and hash are untouched.
-  void rehash(const std::vector<Vec3<S>>& vertices, const std::vector<Triangle>& triangles);
+  /// After a geometry change: a new version, fresh bounds, the CPU hash marked stale.
+  void geometryChanged();
+
+  struct Lazy;  // the lock and the "CPU hash is current" flag (on the heap: movable class)
 
   TriangleMesh<S> mesh_;
   Transform<S> pose_;
+  detail::Aabb<double> bounds_{};
+  // Rebuilt in place: the buffers of the last build are reused (a deforming mesh rebuilds
+  // without allocating).
   std::unique_ptr<detail::HierarchicalHash<S>> hash_;
-  std::unique_ptr<detail::HierarchicalHash<S>> spare_;  // reused buffers for the next rebuild
+  std::unique_ptr<Lazy> lazy_;
   std::uint64_t version_ = 0;
   int threads_ = 0;
 };

@@ -15,12 +15,13 @@ namespace detail {
 /// Owning CPU structure. Per triangle: box, enclosing diameter, level. Cells: an open-addressing
 /// table of full 128-bit keys, each slot pointing at a contiguous run of `entries`, sorted by
 /// decreasing diameter (ties: increasing id) inside a cell. Memory is linear in the triangle count.
+/// The layout (slots, entries) is a function of the mesh alone, never of the thread count.
 template <class S>
 class HierarchicalHash {
  public:
   /// One (cell, triangle) entry. The triangle's box and diameter are copied next to its id so
-  /// that scanning a cell reads memory sequentially.
-  struct Entry {
+  /// that scanning a cell reads memory sequentially; one cache line each.
+  struct alignas(64) Entry {
     Aabb<double> box;
     double diameter;
     std::uint32_t id;
@@ -35,22 +36,23 @@ class HierarchicalHash {
     std::uint32_t count;  // 0: empty slot (an occupied cell always holds a triangle)
   };
 
-  /// Builds from a mesh's local coordinates (validated by the caller). On an exception (only
-  /// std::bad_alloc or a too-large mesh) the object is left empty; HashedMesh builds into a spare
-  /// one so that its own state survives.
+  /// Builds from a mesh's local coordinates (validated by the caller), on up to `threads` threads
+  /// (0: all). On an exception (only std::bad_alloc, or InvalidInputError for a mesh too large for
+  /// 32-bit entry indices) the object is left empty (and keeps its scratch buffers).
   void build(const std::vector<Vec3<S>>& vertices, const std::vector<Triangle>& triangles,
              int threads);
   void build(const TriangleMesh<S>& mesh, int threads) { build(mesh.vertices, mesh.triangles, threads); }
 
-  /// The slot of a cell, or nullptr when the cell is empty.
+  /// The slot of a cell, or nullptr when the cell is empty. A cell's home slot is given by the
+  /// high bits of hashCellKey(); the table is laid out by linear probing in increasing home order
+  /// and ends in an overflow tail plus an empty sentinel slot, so probing runs forward without
+  /// wrapping and always stops at an empty slot.
   const Slot* find(const CellKey& key) const {
     if (slots_.empty()) return nullptr;
-    std::uint64_t i = hashCellKey(key) & mask_;
-    while (true) {
-      const Slot& s = slots_[i];
-      if (s.count == 0) return nullptr;
-      if (s.key == key) return &s;
-      i = (i + 1) & mask_;
+    const Slot* s = slots_.data() + (hashCellKey(key) >> shift_);
+    for (;; ++s) {
+      if (s->count == 0) return nullptr;
+      if (s->key == key) return s;
     }
   }
 
@@ -74,12 +76,33 @@ class HierarchicalHash {
   std::vector<Entry> entries;
 
  private:
-  std::vector<Slot> slots_;
+  /// One (cell, triangle) record of the build: the full key, the top 32 bits of its hash (the
+  /// home slot is a prefix of them), the triangle and the bits of its diameter (a non-negative
+  /// double: the bits order like the values).
+  struct Rec {
+    CellKey key;
+    std::uint32_t h32;
+    std::uint32_t tri;
+    std::uint64_t dbits;
+  };
+  /// Per hash bucket (a fixed range of home slots): occupied cells, and the slot after the last
+  /// one when the bucket starts empty (no overflow from the previous bucket).
+  struct BucketInfo {
+    std::uint32_t begin;  // first record of the bucket
+    std::uint32_t cells;
+    std::uint64_t end0;
+    std::uint64_t write_begin;  // first slot this bucket writes (its start plus the overflow in)
+  };
+  void buildImpl(const std::vector<Vec3<S>>& vertices, const std::vector<Triangle>& triangles,
+                 int threads);
+  void clear();
+
+  std::vector<Slot> slots_;  // capacity home slots, the overflow tail, one empty sentinel
   // Build scratch, kept so that rebuilding a deforming mesh reuses its memory.
-  std::vector<std::uint64_t> scratch_offset_;
-  std::vector<std::uint32_t> scratch_slot_, scratch_order_, scratch_fill_;
-  std::vector<std::uint8_t> scratch_mask_;
-  std::uint64_t mask_ = 0;
+  std::vector<Rec> scratch_rec_;
+  std::vector<std::uint32_t> scratch_hist_, scratch_cell_;
+  std::vector<BucketInfo> scratch_bucket_;
+  unsigned shift_ = 64;  // home slot = hashCellKey(key) >> shift_ (capacity = 2^(64 - shift_))
   std::size_t cells_ = 0;
 };
 

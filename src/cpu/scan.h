@@ -43,15 +43,17 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
             const int verdict = accept(e.id, e.diameter);
             if (verdict < 0) break;  // the rest of the cell is smaller still
             if (verdict == 0) continue;
-            ++st.box_tests;
-            if (!detail::boxesOverlap(qbox, e.box)) continue;
             // The canonical cell holds the overlap's minimum corner. cellCoord is monotone, so its
             // coordinate on each axis is max(first cell of the query, first cell of the
             // candidate): this is that cell iff on every axis it is the candidate's first cell or
             // the query's (r.lo is the query's first cell: clipping to the bounds never moves it).
+            // The test needs no box, so it runs first: a pair seen from another cell of the
+            // query's range costs three integer comparisons, not a box test.
             if (!(((e.lo_mask & 1) || x == r.lo[0]) && ((e.lo_mask & 2) || y == r.lo[1]) &&
                   ((e.lo_mask & 4) || z == r.lo[2])))
               continue;
+            ++st.box_tests;
+            if (!detail::boxesOverlap(qbox, e.box)) continue;
             if (!test_and_emit(e.id)) return false;
           }
         }

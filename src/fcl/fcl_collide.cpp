@@ -358,11 +358,13 @@ bool pairMatters(const fcl::CollisionGeometry<S>* g1, const fcl::CollisionGeomet
 
 /// Whether the two meshes' local bounding boxes, placed at their poses, are disjoint by more than
 /// rounding (a 15-axis separating-axis test in double, boxes grown by a relative 1e-9 so touching
-/// pairs are never lost). Lets non-overlapping poses skip kDet's per-triangle scans.
+/// pairs are never lost). Lets non-overlapping poses skip kDet's per-triangle scans. Uses the
+/// vertex boxes HashedMesh keeps current, so it never forces a CPU re-hash (the query may run on
+/// the GPU).
 template <class S>
 bool boxesApart(const HashedMesh<S>& a, const HashedMesh<S>& b) {
-  const detail::Aabb<double>& ba = a.hash().bounds;
-  const detail::Aabb<double>& bb = b.hash().bounds;
+  const detail::Aabb<double>& ba = a.localBounds();
+  const detail::Aabb<double>& bb = b.localBounds();
   if (a.numTriangles() == 0 || b.numTriangles() == 0) return true;
   const Transform<double> pa = detail::toDouble(a.pose()), pb = detail::toDouble(b.pose());
   double ha[3], hb[3], scale = 0;

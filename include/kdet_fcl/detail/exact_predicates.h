@@ -235,11 +235,12 @@ KDET_HD_INLINE int orient2dSign(double ax, double ay, double bx, double by, doub
   return exact::orient2dSignExact(ax, ay, bx, by, cx, cy);
 }
 
-/// The exact sign (-1, 0, +1) of det[b-a; c-a; d-a] (rows) = dot(cross(b-a, c-a), d-a): positive
-/// when d lies on the side of the plane (a, b, c) that cross(b-a, c-a) points to. Exact inside the
-/// validity range documented at the top of this file.
-KDET_HD_INLINE int orient3dSign(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
-                                const Vec3<double>& d) {
+/// The floating-point filter of orient3dSign() alone: +1 or -1 when it proves the sign of
+/// det[b-a; c-a; d-a] (then that is the exact sign), 0 when it cannot (orient3dSign would fall
+/// back to expansion arithmetic). For callers that only act on proven signs, such as the GPU's
+/// plane filter, which drops a candidate pair only where the exact test would reject it.
+KDET_HD_INLINE int orient3dFilterSign(const Vec3<double>& a, const Vec3<double>& b,
+                                      const Vec3<double>& c, const Vec3<double>& d) {
   const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
   const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
   const double wx = d.x - a.x, wy = d.y - a.y, wz = d.z - a.z;
@@ -262,7 +263,16 @@ KDET_HD_INLINE int orient3dSign(const Vec3<double>& a, const Vec3<double>& b, co
     if (det > bound) return 1;
     if (-det > bound) return -1;
   }
-  return exact::orient3dSignExact(a, b, c, d);
+  return 0;
+}
+
+/// The exact sign (-1, 0, +1) of det[b-a; c-a; d-a] (rows) = dot(cross(b-a, c-a), d-a): positive
+/// when d lies on the side of the plane (a, b, c) that cross(b-a, c-a) points to. Exact inside the
+/// validity range documented at the top of this file.
+KDET_HD_INLINE int orient3dSign(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
+                                const Vec3<double>& d) {
+  const int s = orient3dFilterSign(a, b, c, d);
+  return s != 0 ? s : exact::orient3dSignExact(a, b, c, d);
 }
 
 }  // namespace detail
