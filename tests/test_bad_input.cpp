@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "oom_util.h"
 #include "test_util.h"
 
 using namespace kdet_fcl;
@@ -255,46 +256,11 @@ enum ChildResult : int {
   kStateChanged = 13,  // after the failure, the object no longer behaves as before
 };
 
-std::size_t currentAddressSpace() {
-  std::ifstream in("/proc/self/statm");
-  std::size_t pages = 0;
-  in >> pages;
-  return pages * std::size_t(::sysconf(_SC_PAGESIZE));
-}
-
-void limitAddressSpace(std::size_t headroom) {
-  rlimit r{};
-  ::getrlimit(RLIMIT_AS, &r);
-  r.rlim_cur = currentAddressSpace() + headroom;
-  ::setrlimit(RLIMIT_AS, &r);
-}
-
-void unlimitAddressSpace() {
-  rlimit r{};
-  ::getrlimit(RLIMIT_AS, &r);
-  r.rlim_cur = r.rlim_max;
-  ::setrlimit(RLIMIT_AS, &r);
-}
+using kdet_test::limitAddressSpace;
+using kdet_test::unlimitAddressSpace;
 
 /// Runs body() in a child; returns its exit code, or -signal.
-int inChild(const std::function<int()>& body) {
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    int code = kOtherError;
-    try {
-      code = body();
-    } catch (...) {
-      code = kOtherError;
-    }
-    std::fflush(nullptr);
-    ::_exit(code);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  if (WIFSIGNALED(status)) return -WTERMSIG(status);
-  return WEXITSTATUS(status);
-}
+int inChild(const std::function<int()>& body) { return kdet_test::runInChild(body, kOtherError); }
 
 TEST(OutOfMemory, AReaderTurnsAllocationFailureIntoMeshFileError) {
   if (kSanitized) GTEST_SKIP() << "RLIMIT_AS and AddressSanitizer do not mix";

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "cpu/hierarchical_hash.h"
+#include "oom_util.h"
 #include "test_util.h"
 
 using namespace kdet_fcl;
@@ -341,38 +342,6 @@ enum LazyOomResult : int {
   kOther = 11,         // any other exception
 };
 
-std::size_t addressSpaceNow() {
-  std::ifstream in("/proc/self/statm");
-  std::size_t pages = 0;
-  in >> pages;
-  return pages * std::size_t(::sysconf(_SC_PAGESIZE));
-}
-
-void setAddressSpaceLimit(bool limited, std::size_t headroom) {
-  rlimit r{};
-  ::getrlimit(RLIMIT_AS, &r);
-  r.rlim_cur = limited ? addressSpaceNow() + headroom : r.rlim_max;
-  ::setrlimit(RLIMIT_AS, &r);
-}
-
-int runInChild(const std::function<int()>& body) {
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    int code = kOther;
-    try {
-      code = body();
-    } catch (...) {
-      code = kOther;
-    }
-    std::fflush(nullptr);
-    ::_exit(code);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  if (WIFSIGNALED(status)) return -WTERMSIG(status);
-  return WEXITSTATUS(status);
-}
 
 }  // namespace
 
@@ -398,22 +367,22 @@ TEST(HashedMesh, AFailedLazyRebuildThrowsFromTheQueryAndKeepsTheMeshUsable) {
        headroom += 512u << 10) {
     TriangleMesh<double> replacement = big;
     ::malloc_trim(0);
-    const int rc = runInChild([&] {
+    const int rc = kdet_test::runInChild([&] {
       h.setMesh(std::move(replacement));  // validates and stores: the re-hash waits for a query
       if (h.cpuHashFresh()) return int(kWrong);
-      setAddressSpaceLimit(true, headroom);
+      kdet_test::limitAddressSpace(headroom);
       try {
         const bool same = kdet_test::sorted(intersectSelf(h, one).pairs) == want;
         return int(same ? kSucceeded : kWrong);
       } catch (const std::bad_alloc&) {
-        setAddressSpaceLimit(false, 0);
+        kdet_test::unlimitAddressSpace();
         // (The failure may also have come after the rebuild, from the query's own output.)
         const bool same = h.numTriangles() == big.triangles.size() &&
                           kdet_test::sorted(intersectSelf(h, one).pairs) == want &&
                           h.cpuHashFresh();
         return int(same ? kFailedCleanly : kWrong);
       }
-    });
+    }, kOther);
     failures += rc == kFailedCleanly;
     successes += rc == kSucceeded;
     wrong += rc == kWrong || rc == kOther;
