@@ -48,6 +48,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_util.h"
 #include "cuda/cuda_backend.h"
 #include "gpu_bvh.cuh"
 #include "kdet_fcl/kdet_fcl.h"
@@ -170,24 +171,7 @@ Pairs fclCollide(const FclModel& a, const FclModel& b, bool collect) {
   for (const auto& c : cs) out.push_back({std::uint32_t(c.b1), std::uint32_t(c.b2)});
   return sortedPairs(out);
 }
-/// FCL's mesh-against-itself answer with the library's self rules applied (i < j, no shared vertex).
-Pairs selfFromPair(const TriangleMesh<float>& m, const Pairs& raw) {
-  Pairs out;
-  for (TrianglePair p : raw) {
-    if (p.a == p.b) continue;
-    if (p.a > p.b) std::swap(p.a, p.b);
-    const auto& A = m.triangles[p.a];
-    const auto& B = m.triangles[p.b];
-    bool share = false;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        share = share || A[i] == B[j] || m.vertices[A[i]] == m.vertices[B[j]];
-    if (!share) out.push_back(p);
-  }
-  out = sortedPairs(out);
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
-}
+using kdet_bench_util::selfFromPair;
 
 struct Config {
   int repeats = 10;
@@ -622,7 +606,8 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--data" && i + 1 < argc) data = argv[++i];
-    else if (a == "--repeats" && i + 1 < argc) cfg.repeats = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--repeats" && i + 1 < argc)
+      cfg.repeats = int(kdet_bench_util::parseIntArg("gpu_bench", "--repeats", argv[++i], 1, 1000000, 2));
     else if (a == "--only" && i + 1 < argc) cfg.only.push_back(argv[++i]);
     else if (a == "--no-fcl") cfg.fcl = false;
     else if (a == "--no-cpu") cfg.cpu = false;

@@ -41,6 +41,7 @@
 #include <kdet_fcl/detail/triangle_intersection.h>
 #include <kdet_fcl/kdet_fcl.h>
 
+#include "bench_util.h"
 #include "bench_scenes.h"
 
 namespace kb = kdet_bench;
@@ -269,26 +270,7 @@ PairList fclCollide(const fcl::BVHModel<BV>& a, const fcl::Transform3d& ta, cons
   return out;
 }
 
-/// FCL's answer to "self-collision": the mesh against itself, with (i, i), both orders and
-/// vertex-sharing pairs removed so it can be compared with kDet's intersectSelf.
-PairList selfFromPair(const kb::Mesh& m, const PairList& raw) {
-  PairList out;
-  out.reserve(raw.size() / 2);
-  for (TrianglePair p : raw) {
-    if (p.a == p.b) continue;
-    if (p.a > p.b) std::swap(p.a, p.b);
-    const auto& A = m.triangles[p.a];
-    const auto& B = m.triangles[p.b];
-    bool share = false;
-    for (int i = 0; i < 3 && !share; ++i)
-      for (int j = 0; j < 3 && !share; ++j)
-        share = A[i] == B[j] || m.vertices[A[i]] == m.vertices[B[j]];
-    if (!share) out.push_back(p);
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
-}
+using kdet_bench_util::selfFromPair;
 
 enum class FclMode { Scene, SelfPair };
 

@@ -46,6 +46,7 @@
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/sphere.h>
 
+#include "bench_util.h"
 #include "kdet_fcl/collision_manager.h"
 
 namespace {
@@ -292,9 +293,14 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--n") && i + 1 < argc) {
       sizes.clear();
       for (char* p = std::strtok(argv[++i], ","); p; p = std::strtok(nullptr, ","))
-        sizes.push_back(std::strtoul(p, nullptr, 10));
+        sizes.push_back(std::size_t(
+            kdet_bench_util::parseIntArg("manager_bench", "--n", p, 1, 100000000, 2)));
+      if (sizes.empty()) {
+        std::fprintf(stderr, "manager_bench: --n wants one or more sizes, e.g. --n 1000,10000\n");
+        return 2;
+      }
     } else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) {
-      reps = std::max(1, std::atoi(argv[++i]));
+      reps = int(kdet_bench_util::parseIntArg("manager_bench", "--reps", argv[++i], 1, 100000, 2));
     } else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) {
       only = argv[++i];  // kdet, dyn-tree or spatial-hash (profiling; skips the cross-check)
     } else if (!std::strcmp(argv[i], "--scene") && i + 1 < argc) {

@@ -45,6 +45,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "bench_util.h"
 #include "exact_referee.h"
 #include "extremes_scenes.h"
 #include "kdet_fcl/kdet_fcl.h"
@@ -93,11 +94,15 @@ Options parse(int argc, char** argv) {
       return argv[++i];
     };
     if (a == "--out") o.out = value();
-    else if (a == "--repeats") o.repeats = std::max(1, std::atoi(value().c_str())), repeats_set = true;
+    else if (a == "--repeats") {
+      o.repeats = int(kdet_bench_util::parseIntArg("precision_bench", "--repeats", value().c_str(), 1, 1000000, 1));
+      repeats_set = true;
+    }
     else if (a == "--small") o.small = true;
     else if (a == "--no-plot") o.plot = false;
     else if (a == "--inject-exact-error") o.inject = true;
-    else if (a == "--threads") o.threads = std::max(0, std::atoi(value().c_str()));
+    else if (a == "--threads")
+      o.threads = int(kdet_bench_util::parseIntArg("precision_bench", "--threads", value().c_str(), 0, 4096, 1));
     else if (a == "--only") {
       std::stringstream ss(value());
       std::string item;

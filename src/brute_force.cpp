@@ -46,12 +46,9 @@ std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& m, Pred
     const Triangle& ti = m.triangles[i];
     for (std::size_t j = i + 1; j < m.triangles.size(); ++j) {
       const Triangle& tj = m.triangles[j];
-      bool adjacent = false;
-      for (int p = 0; p < 3; ++p)
-        for (int q = 0; q < 3; ++q)
-          adjacent = adjacent || ti[p] == tj[q] || v[ti[p]] == v[tj[q]];
-      if (!adjacent && detail::trianglesIntersect(predicate, v[ti[0]], v[ti[1]], v[ti[2]], v[tj[0]],
-                                                  v[tj[1]], v[tj[2]]))
+      if (m.sharesVertex(std::uint32_t(i), std::uint32_t(j))) continue;  // adjacent
+      if (detail::trianglesIntersect(predicate, v[ti[0]], v[ti[1]], v[ti[2]], v[tj[0]], v[tj[1]],
+                                     v[tj[2]]))
         out.push_back({std::uint32_t(i), std::uint32_t(j)});
     }
   }

@@ -27,16 +27,6 @@ bool countsFor(const TriangleMesh<S>& m, const std::vector<double>& d, std::uint
          r * r;
 }
 
-template <class S>
-bool adjacent(const TriangleMesh<S>& m, std::uint32_t i, std::uint32_t j) {
-  const Triangle& a = m.triangles[i];
-  const Triangle& b = m.triangles[j];
-  for (int p = 0; p < 3; ++p)
-    for (int q = 0; q < 3; ++q)
-      if (a[p] == b[q] || m.vertices[a[p]] == m.vertices[b[q]]) return true;
-  return false;
-}
-
 KFreeStats summarize(std::vector<std::uint32_t>&& counts, const std::vector<std::uint32_t>& adj,
                      int height, bool keep) {
   KFreeStats st;
@@ -83,7 +73,7 @@ KFreeStats analyzeKFree(const TriangleMesh<S>& mesh, const KFreeOptions& options
           [&](std::uint32_t j) {
             if (countsFor(mesh, h.diameter, ui, j)) {
               ++counts[i];
-              if (adjacent(mesh, ui, j)) ++adj[i];
+              if (mesh.sharesVertex(ui, j)) ++adj[i];
             }
             return true;
           },
@@ -104,7 +94,7 @@ KFreeStats analyzeKFreeBruteForce(const TriangleMesh<S>& mesh, const KFreeOption
     for (std::uint32_t j = 0; j < n; ++j)
       if (countsFor(mesh, h.diameter, i, j)) {
         ++counts[i];
-        if (adjacent(mesh, i, j)) ++adj[i];
+        if (mesh.sharesVertex(i, j)) ++adj[i];
       }
   return summarize(std::move(counts), adj, n ? h.top_level + 1 : 0, options.keep_counts);
 }

@@ -17,18 +17,7 @@ using kdet_test::sorted;
 
 namespace {
 
-#define SKIP_WITHOUT_DEVICE()                                   \
-  do {                                                          \
-    if (cudaDeviceCount() == 0) GTEST_SKIP() << "no CUDA device"; \
-  } while (0)
-
-std::string dataFile(const std::string& rel) {
-  const char* env = std::getenv("KDET_FCL_DATA_DIR");
-  const std::filesystem::path root = (env && *env) ? std::filesystem::path(env)
-                                                   : std::filesystem::path(KDET_FCL_SHARED_DATA);
-  const std::filesystem::path p = root / rel;
-  return std::filesystem::exists(p) ? p.string() : std::string();
-}
+using kdet_test::sharedData;
 
 template <class S>
 std::vector<TrianglePair> cpuInter(const TriangleMesh<S>& a, const Transform<S>& pa,
@@ -48,7 +37,7 @@ using Scalars = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(CudaBvhTyped, Scalars);
 
 TYPED_TEST(CudaBvhTyped, RandomSoupsWithPoseMatchCpuAndBruteForce) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   using S = TypeParam;
   const TriangleMesh<S> a = makeRandomSoup<S>(3000, S(4), S(0.01), S(0.6), 7);
   const TriangleMesh<S> b = makeRandomSoup<S>(1000, S(4), S(0.05), S(0.9), 11);
@@ -70,7 +59,7 @@ TYPED_TEST(CudaBvhTyped, RandomSoupsWithPoseMatchCpuAndBruteForce) {
 }
 
 TYPED_TEST(CudaBvhTyped, DeformingClothRefitAndRebuildMatchCpu) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   using S = TypeParam;
   const TriangleMesh<S> sphere = makeSphere<S>({0, 0, 0}, S(1), 48, 24);
   kdet_bvh::GpuBvh<S> gc, gs;
@@ -98,7 +87,7 @@ TYPED_TEST(CudaBvhTyped, DeformingClothRefitAndRebuildMatchCpu) {
 }
 
 TEST(CudaBvh, OutputOverflowGrowsAndReruns) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   const TriangleMesh<float> a = makeRandomSoup<float>(4000, 3.f, 0.05f, 0.8f, 3);
   kdet_bvh::GpuBvh<float> g;
   g.setMesh(a);
@@ -115,7 +104,7 @@ TEST(CudaBvh, OutputOverflowGrowsAndReruns) {
 }
 
 TEST(CudaBvh, SoupSelfSkipsEqualCoordinatesAndTinyMeshes) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   // A triangle soup of a folded grid: neighbours share coordinates, not indices.
   TriangleMesh<float> soup;
   const TriangleMesh<float> cloth = makeDrapedCloth<float>(30, 3.f, 1.f, 0.02f, 1.f);
@@ -138,9 +127,9 @@ TEST(CudaBvh, SoupSelfSkipsEqualCoordinatesAndTinyMeshes) {
 }
 
 TEST(CudaBvh, UncClothBallFramesMatchKdetGpuAndCpu) {
-  SKIP_WITHOUT_DEVICE();
-  const std::string f92 = dataFile("unc/cloth-ball/cloth_ball92.ply");
-  const std::string f93 = dataFile("unc/cloth-ball/cloth_ball93.ply");
+  KDET_SKIP_WITHOUT_DEVICE();
+  const std::string f92 = sharedData("unc/cloth-ball/cloth_ball92.ply");
+  const std::string f93 = sharedData("unc/cloth-ball/cloth_ball93.ply");
   if (f92.empty() || f93.empty()) GTEST_SKIP() << "UNC cloth-ball frames not found";
   const TriangleMesh<float> a = readMesh<float>(f92), b = readMesh<float>(f93);
   HashedMesh<float> ha(a), hb(b);

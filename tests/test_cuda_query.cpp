@@ -25,19 +25,7 @@ using kdet_test::sorted;
 
 namespace {
 
-#define SKIP_WITHOUT_DEVICE()                                                          \
-  do {                                                                                 \
-    if (cudaDeviceCount() == 0)                                                        \
-      GTEST_SKIP() << (builtWithCuda() ? "no CUDA device" : "built without CUDA");     \
-  } while (0)
-
-std::string dataFile(const std::string& rel) {
-  const char* env = std::getenv("KDET_FCL_DATA_DIR");
-  const std::filesystem::path root = (env && *env) ? std::filesystem::path(env)
-                                                   : std::filesystem::path(KDET_FCL_SHARED_DATA);
-  const std::filesystem::path p = root / rel;
-  return std::filesystem::exists(p) ? p.string() : std::string();
-}
+using kdet_test::sharedData;
 
 QueryOptions on(Backend b, std::size_t max_pairs = 0, Predicate pred = Predicate::Exact) {
   QueryOptions o;
@@ -95,7 +83,7 @@ TEST(CudaQuery, CudaWithoutDeviceIsATypedError) {
 }
 
 TEST(CudaQuery, ResolvesToCudaWithADevice) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   EXPECT_EQ(resolveBackend(Backend::Cuda, 10), Backend::Cuda);
   EXPECT_EQ(resolveBackend(Backend::Auto, autoCudaMinTriangles()), Backend::Cuda);
   EXPECT_EQ(resolveBackend(Backend::Auto, autoCudaMinTriangles() - 1), Backend::Cpu);
@@ -104,7 +92,7 @@ TEST(CudaQuery, ResolvesToCudaWithADevice) {
 }
 
 TYPED_TEST(CudaQueryTyped, RandomSoupsOfSeveralSizeDistributions) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   using S = TypeParam;
   struct Dist {
     S min_size, max_size;
@@ -135,7 +123,7 @@ TYPED_TEST(CudaQueryTyped, RandomSoupsOfSeveralSizeDistributions) {
 }
 
 TYPED_TEST(CudaQueryTyped, ClothOverSphereAndSelf) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   using S = TypeParam;
   for (int n : {24, 110}) {
     HashedMesh<S> cloth(makeDrapedCloth<S>(n, S(4), S(1), S(0.03), S(1)));
@@ -154,7 +142,7 @@ TYPED_TEST(CudaQueryTyped, ClothOverSphereAndSelf) {
 }
 
 TYPED_TEST(CudaQueryTyped, SameMeshOnBothSidesAndEmptyMeshes) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   using S = TypeParam;
   HashedMesh<S> s(makeSphere<S>({0, 0, 0}, S(1), 16, 8));
   EXPECT_GT(expectSameInter(s, s, "sphere against itself"), 0u);
@@ -165,8 +153,8 @@ TYPED_TEST(CudaQueryTyped, SameMeshOnBothSidesAndEmptyMeshes) {
 }
 
 TEST(CudaQuery, FclEnvAgainstRobUnderRandomPoses) {
-  SKIP_WITHOUT_DEVICE();
-  const std::string env = dataFile("fcl/env.obj"), rob = dataFile("fcl/rob.obj");
+  KDET_SKIP_WITHOUT_DEVICE();
+  const std::string env = sharedData("fcl/env.obj"), rob = sharedData("fcl/rob.obj");
   if (env.empty() || rob.empty()) GTEST_SKIP() << "fcl/env.obj, fcl/rob.obj absent";
   HashedMesh<double> henv(readMesh<double>(env)), hrob(readMesh<double>(rob));
   HashedMesh<float> fenv(readMesh<float>(env)), frob(readMesh<float>(rob));
@@ -194,9 +182,9 @@ TEST(CudaQuery, FclEnvAgainstRobUnderRandomPoses) {
 }
 
 TEST(CudaQuery, UncClothBallAndFunnelFrames) {
-  SKIP_WITHOUT_DEVICE();
-  const std::string f92 = dataFile("unc/cloth-ball/cloth_ball92.ply");
-  const std::string f93 = dataFile("unc/cloth-ball/cloth_ball93.ply");
+  KDET_SKIP_WITHOUT_DEVICE();
+  const std::string f92 = sharedData("unc/cloth-ball/cloth_ball92.ply");
+  const std::string f93 = sharedData("unc/cloth-ball/cloth_ball93.ply");
   if (f92.empty() || f93.empty()) GTEST_SKIP() << "unc/cloth-ball absent";
   HashedMesh<float> a(readMesh<float>(f92)), b(readMesh<float>(f93));
   expectSameSelf(a, "cloth_ball92 self");
@@ -207,8 +195,8 @@ TEST(CudaQuery, UncClothBallAndFunnelFrames) {
     b.setPose(kdet_test::randomPose<float>(rng, -0.05, 0.05));
     expectSameInter(a, b, "cloth_ball92 vs posed 93, " + std::to_string(k));
   }
-  const std::string g227 = dataFile("unc/cloth-funnel/227.ply");
-  const std::string g228 = dataFile("unc/cloth-funnel/228.ply");
+  const std::string g227 = sharedData("unc/cloth-funnel/227.ply");
+  const std::string g228 = sharedData("unc/cloth-funnel/228.ply");
   if (g227.empty() || g228.empty()) return;
   HashedMesh<double> c(readMesh<double>(g227)), d(readMesh<double>(g228));
   expectSameSelf(c, "funnel 227 self");
@@ -216,7 +204,7 @@ TEST(CudaQuery, UncClothBallAndFunnelFrames) {
 }
 
 TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 0.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
   EXPECT_EQ(expectSameInter(cloth, sphere, "flat"), 0u);
@@ -243,7 +231,7 @@ TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
 }
 
 TEST(CudaQuery, NewMeshesAtTheSameAddressAreNotConfused) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 24, 12));
   std::optional<HashedMesh<double>> cloth;
   for (double t : {0.2, 0.5, 0.8, 1.0}) {
@@ -254,7 +242,7 @@ TEST(CudaQuery, NewMeshesAtTheSameAddressAreNotConfused) {
 }
 
 TEST(CudaQuery, HugeSizeRatioUsesFull128BitKeys) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   // Cell coordinates need > 21 bits per axis here, so the device sorts full 128-bit keys.
   TriangleMesh<double> m = makeRandomSoup<double>(3000, 2.0, 1e-4, 0.05, 11);
   m.addTriangle({-1e6, -1e6, 0.3}, {1e6, -1e6, 0.3}, {0, 1e6, 0.3});
@@ -266,7 +254,7 @@ TEST(CudaQuery, HugeSizeRatioUsesFull128BitKeys) {
 }
 
 TEST(CudaQuery, OutputOverflowGrowsAndReruns) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(80, 4.0, 1.0, 0.03, 1.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 48, 24));
   const auto cpu_inter = sorted(intersectMeshes(cloth, sphere).pairs);
@@ -291,7 +279,7 @@ TEST(CudaQuery, OutputOverflowGrowsAndReruns) {
 }
 
 TEST(CudaQuery, MaxPairsReturnsAPrefixOfTheSortedOrder) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(40, 4.0, 1.0, 0.03, 1.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
   const QueryResult all = intersectMeshes(cloth, sphere, on(Backend::Cuda));
@@ -312,7 +300,7 @@ TEST(CudaQuery, MaxPairsReturnsAPrefixOfTheSortedOrder) {
 }
 
 TEST(CudaQuery, InexactPredicatesMatchTheCpuToo) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<float> cloth(makeDrapedCloth<float>(50, 4.f, 1.f, 0.03f, 1.f));
   HashedMesh<float> sphere(makeSphere<float>({0, 0, 0}, 1.f, 32, 16));
   for (Predicate p : {Predicate::Double, Predicate::Float}) {
@@ -366,7 +354,7 @@ TriangleMesh<S> nearCoplanarSheets(int n, bool tilt, std::uint64_t seed, bool sh
 }
 
 TYPED_TEST(CudaQueryTyped, NearCoplanarAndTouchingPairsSurviveThePlaneFilter) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   using S = TypeParam;
   std::size_t total = 0;
 #if KDET_FCL_TEST_HAVE_CUDA
@@ -404,7 +392,7 @@ TYPED_TEST(CudaQueryTyped, NearCoplanarAndTouchingPairsSurviveThePlaneFilter) {
 TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   // The filter can be switched off per query (KDET_FCL_CUDA_PLANE_FILTER=0); both ways, and with
   // tiny buffers (every buffer overflows, the survivors' too), the pairs are the CPU's.
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(80, 4.0, 1.0, 0.03, 1.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 48, 24));
   HashedMesh<float> sheets(nearCoplanarSheets<float>(24, true, 7));
@@ -438,9 +426,9 @@ TEST(CudaQuery, PlaneFilterCountsAndBytesPerTriangle) {
   // Not a timing: reports how many candidates reach the exact test and the device memory per
   // triangle on the UNC cloth ball (or a draped cloth without the data), and checks the counts'
   // consistency.
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
-  const std::string f92 = dataFile("unc/cloth-ball/cloth_ball92.ply");
+  const std::string f92 = sharedData("unc/cloth-ball/cloth_ball92.ply");
   HashedMesh<float> m(f92.empty() ? makeDrapedCloth<float>(200, 4.f, 1.f, 0.03f, 1.f)
                                   : readMesh<float>(f92));
   cuda::releaseDeviceMemory();
@@ -464,7 +452,7 @@ TEST(CudaQuery, CompactAndFullCellKeysBothMatchTheCpu) {
   // The same meshes hashed with compact 64-bit cell keys (the default where they are exact) and
   // with 128-bit keys (KDET_FCL_CUDA_FULL_KEYS=1, forced): both compare whole keys, so both give
   // the CPU's pairs, through first builds and re-hashes alike.
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 1.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
@@ -494,7 +482,7 @@ TEST(CudaQuery, RehashWithoutReadBackAndItsFallbacks) {
   // that it fitted. Forced overflows (KDET_FCL_CUDA_REHASH_CAP) and a deformation whose keys no
   // longer fit the compact sort must fall back to a build with read-backs and rerun the query,
   // with the CPU's pairs every time.
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
     GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
 #if KDET_FCL_TEST_HAVE_CUDA
@@ -562,7 +550,7 @@ TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
   // sizes and buffers stay, captured again when they change, e.g. after a fallback grew the
   // arrays); KDET_FCL_CUDA_REHASH_GRAPH=0 enqueues the same work directly. Same pairs as the
   // CPU either way.
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
     GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
 #if KDET_FCL_TEST_HAVE_CUDA
@@ -596,7 +584,7 @@ TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
 TEST(CudaQuery, DeviceBytesPerTriangleOnACloth) {
   // Not a timing: the device memory after one self query of a draped cloth (a first build) and
   // after a re-hash, per triangle, with the breakdown; the bound is issue 4's target.
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   HashedMesh<float> m(makeDrapedCloth<float>(200, 4.f, 1.f, 0.03f, 1.f));
   cuda::releaseDeviceMemory();
@@ -615,7 +603,7 @@ TEST(CudaQuery, DeviceBytesPerTriangleOnACloth) {
 }
 
 TEST(CudaQuery, AutoPicksTheGpuForLargeQueries) {
-  SKIP_WITHOUT_DEVICE();
+  KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(150, 4.0, 1.0, 0.03, 1.0));  // 45k triangles
   ASSERT_GE(cloth.numTriangles(), autoCudaMinTriangles());
   const QueryResult a = intersectSelf(cloth, on(Backend::Auto));

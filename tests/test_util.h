@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -25,11 +26,23 @@ constexpr bool kSanitized = false;
 constexpr bool kSanitized = false;
 #endif
 
-/// Absolute path of a file in ../shared/data, or "" when the folder is absent (tests skip).
+/// Absolute path of a data file, or "" when it is absent (tests skip). The folder is
+/// $KDET_FCL_DATA_DIR when set (an offline GPU box keeps a copy of the files it needs there, see
+/// scripts/gpu_check.sh), else ../shared/data beside the checkout.
 inline std::string sharedData(const std::string& rel) {
-  const std::filesystem::path p = std::filesystem::path(KDET_FCL_SHARED_DATA) / rel;
+  const char* env = std::getenv("KDET_FCL_DATA_DIR");
+  const std::filesystem::path root = (env && *env) ? std::filesystem::path(env)
+                                                   : std::filesystem::path(KDET_FCL_SHARED_DATA);
+  const std::filesystem::path p = root / rel;
   return std::filesystem::exists(p) ? p.string() : std::string();
 }
+
+/// Skips a GPU test on a machine without a CUDA device (or a build without CUDA).
+#define KDET_SKIP_WITHOUT_DEVICE()                                                     \
+  do {                                                                                 \
+    if (kdet_fcl::cudaDeviceCount() == 0)                                              \
+      GTEST_SKIP() << (kdet_fcl::builtWithCuda() ? "no CUDA device" : "built without CUDA"); \
+  } while (0)
 
 inline std::vector<kdet_fcl::TrianglePair> sorted(std::vector<kdet_fcl::TrianglePair> v) {
   std::sort(v.begin(), v.end());

@@ -30,6 +30,18 @@ struct TriangleMesh {
   /// (zero area, repeated indices) are valid.
   void validate(bool require_triangles = false, const std::string& what = "mesh") const;
 
+  /// Whether triangles i and j share a vertex: the same index, or equal coordinates (so that
+  /// triangle soups work). Such pairs are adjacent, not colliding: the self-collision rule of
+  /// intersectSelf, bruteForceIntersectSelf and the k-free analysis.
+  bool sharesVertex(std::uint32_t i, std::uint32_t j) const {
+    const Triangle& a = triangles[i];
+    const Triangle& b = triangles[j];
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q)
+        if (a[p] == b[q] || vertices[a[p]] == vertices[b[q]]) return true;
+    return false;
+  }
+
   /// Convenience: append a triangle with three new vertices (triangle-soup style).
   void addTriangle(const Vec3<S>& a, const Vec3<S>& b, const Vec3<S>& c) {
     const auto i = static_cast<std::uint32_t>(vertices.size());

@@ -224,14 +224,6 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
   const Triangle* t = m.triangles.data();
   const std::size_t max_pairs = options.max_pairs;
 
-  // Pairs that share a vertex (by index, or by equal coordinates for soups) are adjacent, not
-  // colliding.
-  auto sharesVertex = [&](std::uint32_t i, std::uint32_t j) {
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b)
-        if (t[i][a] == t[j][b] || v[t[i][a]] == v[t[j][b]]) return true;
-    return false;
-  };
 
   return runChunks((n + kChunk - 1) / kChunk, threads, max_pairs,
                    [&](std::size_t c, std::vector<TrianglePair>& out, QueryStats& st) {
@@ -244,7 +236,7 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
           h, h.boxes[i], di,
           [&](std::uint32_t j, double dj) { return dj > di ? 1 : (dj == di ? (j > ui ? 1 : 0) : -1); },
           [&](std::uint32_t j) {
-            if (sharesVertex(ui, j)) return true;
+            if (m.sharesVertex(ui, j)) return true;  // adjacent, not colliding
             ++st.triangle_tests;
             // Lower index first: the plain (inexact) predicates are not symmetric, and this is
             // the order bruteForceIntersectSelf uses.
