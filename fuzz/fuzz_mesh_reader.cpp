@@ -6,6 +6,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -31,6 +32,22 @@ void readOne(const std::string& path) {
   }
   m.validate();  // throws (a bug) if the reader let an invalid mesh through
   const std::string out = tempPath("_rt");
+  if (std::string(KDET_FUZZ_EXTENSION) == ".stl") {
+    // Binary STL stores floats: the writer must refuse exactly the meshes with a referenced
+    // coordinate beyond float's range (a double read of an ASCII STL can hold one).
+    bool fits = true;
+    for (const auto& t : m.triangles)
+      for (const std::uint32_t v : t)
+        for (int k = 0; k < 3; ++k) fits = fits && std::isfinite(static_cast<float>(m.vertices[v][k]));
+    if (!fits) {
+      try {
+        kdet_fcl::writeMesh(m, out);
+      } catch (const kdet_fcl::MeshFileError&) {
+        return;
+      }
+      std::abort();  // an unrepresentable coordinate was written
+    }
+  }
   kdet_fcl::writeMesh(m, out);
   const kdet_fcl::TriangleMesh<S> back = kdet_fcl::readMesh<S>(out);
   std::remove(out.c_str());

@@ -1185,9 +1185,29 @@ void writePly(const TriangleMesh<S>& mesh, FileWriter& w) {
   }
 }
 
+// Binary STL stores 32-bit floats: a double coordinate beyond float's range would be written as
+// an infinity that no reader accepts back. Checked before the file is opened, so a refused mesh
+// leaves no partial file behind.
 template <class S>
-void writeStl(const TriangleMesh<S>& mesh, FileWriter& w, const std::string& path) {
+void checkStlWritable(const TriangleMesh<S>& mesh, const std::string& path) {
   if (mesh.triangles.size() > 0xFFFFFFFFu) fail(path, "too many triangles for binary STL");
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t v = mesh.triangles[t][c];
+      for (int k = 0; k < 3; ++k) {
+        if (std::isfinite(static_cast<float>(mesh.vertices[v][k]))) continue;
+        std::string num;
+        appendNumber(num, mesh.vertices[v][k]);
+        fail(path, "vertex " + std::to_string(v) + " (of triangle " + std::to_string(t) +
+                       ") has coordinate " + num +
+                       ", beyond the range of the 32-bit floats binary STL stores; write .obj, "
+                       ".off or .ply to keep it");
+      }
+    }
+}
+
+template <class S>
+void writeStl(const TriangleMesh<S>& mesh, FileWriter& w) {  // after checkStlWritable
   const bool swap = !hostIsLittleEndian();
   std::string& b = w.buffer();
   std::string header = "binary STL written by kdet_fcl";
@@ -1265,6 +1285,7 @@ void writeMesh(const TriangleMesh<S>& mesh, const std::string& path) {
                    " (expected .obj, .off, .ply or .stl)");
   // An invalid mesh is the caller's error (InvalidInputError), not the file's.
   mesh.validate(false, path);
+  if (ext == ".stl") checkStlWritable(mesh, path);
   try {
     FileWriter w(path);
     if (ext == ".obj")
@@ -1274,7 +1295,7 @@ void writeMesh(const TriangleMesh<S>& mesh, const std::string& path) {
     else if (ext == ".ply")
       writePly(mesh, w);
     else
-      writeStl(mesh, w, path);
+      writeStl(mesh, w);
     w.close();
   } catch (const MeshFileError&) {
     throw;

@@ -211,6 +211,38 @@ TEST_F(MeshIoTest, WriteErrors) {
   EXPECT_THROW(writeMesh(bad, path("bad.ply")), kdet_fcl::InvalidInputError);
 }
 
+// Binary STL stores floats: a double coordinate beyond float's range is refused with the vertex
+// named (before, it was written as an infinity that the reader then rejected), no file is left,
+// and the formats that keep doubles still write it. Found by fuzz_read_stl.
+TEST_F(MeshIoTest, StlRefusesCoordinatesBeyondFloat) {
+  auto m = sampleMesh<double>();
+  m.vertices[1].y = 1.1e70;
+  const std::string p = path("huge.stl");
+  try {
+    writeMesh(m, p);
+    ADD_FAILURE() << "writing 1.1e70 to binary STL did not throw";
+  } catch (const MeshFileError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("vertex 1"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("1.1e+70"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("32-bit floats"), std::string::npos) << msg;
+  }
+  EXPECT_FALSE(fs::exists(p));
+  for (const char* ext : {".obj", ".off", ".ply"}) {
+    const std::string q = path(std::string("huge") + ext);
+    writeMesh(m, q);
+    EXPECT_EQ(readMesh<double>(q).vertices[1].y, 1.1e70) << ext;
+  }
+  // The largest float itself is representable, and so is a double that rounds down to it.
+  m.vertices[1].y = double(std::numeric_limits<float>::max());
+  writeMesh(m, p);
+  EXPECT_EQ(readMesh<double>(p).triangles.size(), m.triangles.size());
+  // An unreferenced vertex is not written to STL, so it does not matter.
+  m.vertices[1].y = 0.5;
+  m.vertices.push_back({1e300, 0, 0});
+  EXPECT_NO_THROW(writeMesh(m, path("unref.stl")));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Generic failures.
 

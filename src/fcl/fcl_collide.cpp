@@ -278,8 +278,6 @@ fcl::Vector3<S> rotateToWorld(const Transform<double>& pose, const Vec3<double>&
   return fcl::Vector3<S>(S(w.x), S(w.y), S(w.z));
 }
 
-inline Vec3<double> toD(const fcl::Vector3<float>& p) { return {p[0], p[1], p[2]}; }
-inline Vec3<double> toD(const fcl::Vector3<double>& p) { return {p[0], p[1], p[2]}; }
 template <class S>
 Vec3<double> toD(const Vec3<S>& p) {
   return {double(p.x), double(p.y), double(p.z)};
