@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -28,6 +29,12 @@
 using namespace kdet_fcl;
 
 namespace {
+
+/// f moved by |n| float steps, up for n > 0, down for n < 0.
+float stepsUp(float f, int n) {
+  for (int k = 0; k < (n > 0 ? n : -n); ++k) f = std::nextafter(f, n > 0 ? HUGE_VALF : -HUGE_VALF);
+  return f;
+}
 
 template <class S>
 void expectEveryTriangleInItsCells(const HashedMesh<S>& hm) {
@@ -41,13 +48,23 @@ void expectEveryTriangleInItsCells(const HashedMesh<S>& hm) {
           const auto* s = h.find(detail::makeCellKey(h.level[i], x, y, z));
           ASSERT_NE(s, nullptr);
           int found = 0;
+          const detail::EntryBox expectBox = detail::entryBox(h.boxes[i], h.grid.origin);
           for (std::uint32_t k = 0; k < s->count; ++k) {
             const auto& e = h.entries[s->begin + k];
             if (e.id != i) continue;
             ++found;
             EXPECT_EQ(e.diameter, h.diameter[i]);
-            EXPECT_EQ(e.box.lo.x, h.boxes[i].lo.x);
-            EXPECT_EQ(e.box.hi.z, h.boxes[i].hi.z);
+            // The compact box holds the triangle's box (offsets from the grid origin, rounded
+            // outward) and is at most two float steps looser on each side.
+            EXPECT_EQ(std::memcmp(&e.box, &expectBox, sizeof e.box), 0);
+            for (int a = 0; a < 3; ++a) {
+              const double lo = h.boxes[i].lo[a] - h.grid.origin[a];
+              const double hi = h.boxes[i].hi[a] - h.grid.origin[a];
+              EXPECT_LE(double(e.box.lo[a]), lo);
+              EXPECT_GE(double(e.box.hi[a]), hi);
+              EXPECT_GT(double(stepsUp(e.box.lo[a], 2)), lo);
+              EXPECT_LT(double(stepsUp(e.box.hi[a], -2)), hi);
+            }
             EXPECT_EQ(e.lo_mask, (x == r.lo[0] ? 1 : 0) | (y == r.lo[1] ? 2 : 0) |
                                      (z == r.lo[2] ? 4 : 0));
           }
@@ -73,6 +90,62 @@ TEST(Hierarchy, EveryTriangleIsInExactlyTheCellsItsBoxCovers) {
   expectEveryTriangleInItsCells(cloth);
   HashedMesh<float> soup(makeRandomSoup<float>(3000, 10.f, 0.001f, 3.f, 9));
   expectEveryTriangleInItsCells(soup);
+}
+
+// The compact entry boxes: rounding outward stays within two float steps, handles zero, tiny
+// values and doubles beyond float's range, and never turns an overlap (even a touch) of two
+// double boxes into a miss.
+TEST(Hierarchy, CompactEntryBoxesNeverDropAnOverlap) {
+  // floatDown / floatUp take offsets >= 0 (boxes inside the hash's bounds, from its low corner).
+  const float fmax = std::numeric_limits<float>::max();
+  EXPECT_EQ(detail::floatDown(0.0), 0.0f);
+  EXPECT_EQ(detail::floatUp(0.0), std::numeric_limits<float>::denorm_min());
+  EXPECT_EQ(detail::floatDown(1e300), stepsUp(fmax, -1));
+  EXPECT_EQ(detail::floatUp(1e300), HUGE_VALF);
+  EXPECT_EQ(detail::floatDown(double(fmax)), stepsUp(fmax, -1));
+  EXPECT_EQ(detail::floatUp(double(fmax)), HUGE_VALF);
+  EXPECT_EQ(detail::floatDown(1e-300), 0.0f);  // rounds to 0, which is below
+  EXPECT_EQ(detail::floatUp(1e-300), std::numeric_limits<float>::denorm_min());
+  EXPECT_EQ(detail::floatDown(1.0), stepsUp(1.0f, -1));  // always one step from the nearest
+  EXPECT_EQ(detail::floatUp(1.0), stepsUp(1.0f, 1));
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> mant(0, 1);
+  std::uniform_int_distribution<int> expo(-140, 125);
+  for (int k = 0; k < 200000; ++k) {
+    const double x = std::ldexp(mant(rng), expo(rng));
+    const float d = detail::floatDown(x), u = detail::floatUp(x);
+    ASSERT_LE(double(d), x) << x;
+    ASSERT_GE(double(u), x) << x;
+    ASSERT_GT(double(stepsUp(d, 2)), x) << x;  // at most two steps away
+    ASSERT_LT(double(stepsUp(u, -2)), x) << x;
+  }
+  // Boxes that touch or nearly touch in double, at several scales and origins: the compact
+  // boxes must overlap whenever the double boxes do.
+  std::uniform_real_distribution<double> unit(0, 1);
+  int touching = 0;
+  for (int k = 0; k < 200000; ++k) {
+    const double scale = std::ldexp(1.0, expo(rng) / 4);
+    const double origin[3] = {-scale * unit(rng), -scale * unit(rng), -scale * unit(rng)};
+    detail::Aabb<double> p, q;
+    for (int a = 0; a < 3; ++a) {
+      p.lo[a] = origin[a] + scale * unit(rng);
+      p.hi[a] = p.lo[a] + scale * unit(rng) * 1e-3;
+      // q starts at p's end, one double step either side of it, or exactly there.
+      const int step = int(rng() % 3) - 1;
+      q.lo[a] = step == 0 ? p.hi[a] : std::nextafter(p.hi[a], step * HUGE_VAL);
+      q.hi[a] = q.lo[a] + scale * unit(rng) * 1e-3;
+      if (rng() & 1) {  // q on the low side on this axis
+        std::swap(p.lo[a], q.lo[a]);
+        std::swap(p.hi[a], q.hi[a]);
+      }
+    }
+    const bool exact = detail::boxesOverlap(p, q);
+    touching += exact;
+    if (exact)
+      ASSERT_TRUE(detail::entryBoxesOverlap(detail::entryBox(p, origin), detail::entryBox(q, origin)))
+          << k;
+  }
+  EXPECT_GT(touching, 1000);  // the touching case was exercised
 }
 
 TEST(Hierarchy, LevelsFollowTheSizeRule) {

@@ -17,7 +17,9 @@ template <class S>
 TriangleMesh<S> readMesh(const std::string& path);
 
 /// Writes a mesh; format from the extension (.obj, .off, .ply = binary little-endian, .stl =
-/// binary). Throws MeshFileError if the file cannot be written.
+/// binary, 32-bit floats). Throws MeshFileError if the file cannot be written, or, for STL, if
+/// a coordinate of a written triangle is beyond float's range (nothing is written then); throws
+/// InvalidInputError for an invalid mesh.
 template <class S>
 void writeMesh(const TriangleMesh<S>& mesh, const std::string& path);
 

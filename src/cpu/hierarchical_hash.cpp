@@ -413,7 +413,7 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
                            (cellCoordScaled(box.lo.y, 1, scale, grid) == cell[1] ? 2 : 0) |
                            (cellCoordScaled(box.lo.z, 2, scale, grid) == cell[2] ? 4 : 0));
           Entry& out = entries[je];
-          out.box = box;
+          out.box = entryBox(box, grid.origin);
           std::memcpy(&out.diameter, &rec[je].dbits, sizeof out.diameter);
           out.id = i;
           out.lo_mask = lo_mask;

@@ -1,7 +1,10 @@
 #pragma once
 // The CPU hierarchical spatial hash of one mesh, built in the mesh's own frame.
 
+#include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <limits>
 #include <vector>
 
 #include "kdet_fcl/detail/aabb.h"
@@ -12,6 +15,47 @@
 namespace kdet_fcl {
 namespace detail {
 
+/// For x >= 0 (not NaN): a float no larger (floatDown) or no smaller (floatUp) than x, at most
+/// two float steps from it: x rounded to nearest (within half a step), then one step toward the
+/// bound, always, which keeps the conversion free of data-dependent branches. Beyond float's
+/// range: the step below the largest float, or infinity.
+inline float floatStep(double x, bool up) {
+  const float f = static_cast<float>(x < double(std::numeric_limits<float>::max())
+                                         ? x
+                                         : double(std::numeric_limits<float>::max()));
+  std::uint32_t u;
+  std::memcpy(&u, &f, sizeof u);
+  u = up ? u + 1 : u - (u != 0);  // the largest float steps up to infinity; 0 stays 0 (x >= 0)
+  float r;
+  std::memcpy(&r, &u, sizeof r);
+  return r;
+}
+inline float floatDown(double x) { return floatStep(x, false); }
+inline float floatUp(double x) { return floatStep(x, true); }
+
+/// A box in a hash entry: float offsets from the grid origin (the low corner of the hash's
+/// bounds, so offsets of boxes inside the bounds are >= 0), rounded outward. The offsets are
+/// computed in double (rounded to nearest, which is monotone) and then rounded outward, so for
+/// any double boxes q and e inside the bounds, q overlapping e implies entryBox(q) overlapping
+/// entryBox(e): the compact test never drops a pair, it only admits a few more within float
+/// rounding of the extent (the exact triangle test decides them). 24 bytes instead of 48.
+struct EntryBox {
+  float lo[3], hi[3];
+};
+inline EntryBox entryBox(const Aabb<double>& b, const double origin[3]) {
+  EntryBox r;
+  for (int a = 0; a < 3; ++a) {
+    r.lo[a] = floatDown(b.lo[a] - origin[a]);
+    r.hi[a] = floatUp(b.hi[a] - origin[a]);
+  }
+  return r;
+}
+/// Closed overlap, as boxesOverlap.
+inline bool entryBoxesOverlap(const EntryBox& p, const EntryBox& q) {
+  return p.lo[0] <= q.hi[0] && q.lo[0] <= p.hi[0] && p.lo[1] <= q.hi[1] && q.lo[1] <= p.hi[1] &&
+         p.lo[2] <= q.hi[2] && q.lo[2] <= p.hi[2];
+}
+
 /// Owning CPU structure. Per triangle: box, enclosing diameter, level. Cells: an open-addressing
 /// table of full 128-bit keys, each slot pointing at a contiguous run of `entries`, sorted by
 /// decreasing diameter (ties: increasing id) inside a cell. Memory is linear in the triangle count.
@@ -19,10 +63,10 @@ namespace detail {
 template <class S>
 class HierarchicalHash {
  public:
-  /// One (cell, triangle) entry. The triangle's box and diameter are copied next to its id so
-  /// that scanning a cell reads memory sequentially; one cache line each.
-  struct alignas(64) Entry {
-    Aabb<double> box;
+  /// One (cell, triangle) entry. The triangle's box (compact: entryBox) and diameter are copied
+  /// next to its id so that scanning a cell reads memory sequentially; 40 bytes.
+  struct Entry {
+    EntryBox box;
     double diameter;
     std::uint32_t id;
     /// Bit a set: this cell is the first of the triangle's cells along axis a. Then the

@@ -30,6 +30,9 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
     const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, h.bounds);
     if (detail::isEmpty(clipped)) continue;
     const detail::CellRange r = detail::cellRange(clipped, L, h.grid);
+    // The entries' boxes lie inside h.bounds, so testing them against the clipped query box is
+    // the same test; in the entries' compact form (rounded outward, never drops a pair).
+    const detail::EntryBox qe = detail::entryBox(clipped, h.grid.origin);
     for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
       for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
         for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
@@ -53,7 +56,7 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
                   ((e.lo_mask & 4) || z == r.lo[2])))
               continue;
             ++st.box_tests;
-            if (!detail::boxesOverlap(qbox, e.box)) continue;
+            if (!detail::entryBoxesOverlap(qe, e.box)) continue;
             if (!test_and_emit(e.id)) return false;
           }
         }
