@@ -1,7 +1,6 @@
 #pragma once
 // The CPU hierarchical spatial hash of one mesh, built in the mesh's own frame.
 
-#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>

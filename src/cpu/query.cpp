@@ -224,7 +224,6 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
   const Triangle* t = m.triangles.data();
   const std::size_t max_pairs = options.max_pairs;
 
-
   return runChunks((n + kChunk - 1) / kChunk, threads, max_pairs,
                    [&](std::size_t c, std::vector<TrianglePair>& out, QueryStats& st) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
