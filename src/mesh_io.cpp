@@ -836,6 +836,7 @@ class PlyReader {
     const Roles roles = rolesOf(el);
     // Every value takes at least one character and one separator.
     checkFits(el, 2 * el.props.size(), cur.remaining(), true);
+    if (el.props.empty()) return;  // no values to read, whatever the count (not a loop over it)
     if (roles.vertex) mesh_.vertices.resize(static_cast<std::size_t>(el.count));
     if (roles.face)
       mesh_.triangles.reserve(

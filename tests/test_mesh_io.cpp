@@ -456,6 +456,19 @@ Bytes binaryPly(bool big, bool dbl, std::uint32_t nv = 4, std::uint32_t nf = 2) 
   return b;
 }
 
+// An element with no properties holds no data whatever its count: the reader must not walk its
+// 7.7e18 declared items (found by fuzz_read_ply as a timeout in the unoptimized fuzz build).
+TEST_F(MeshIoTest, PlyPropertylessElementWithAHugeCountIsNotWalked) {
+  const auto m = readMesh<double>(writeText("empty_el.ply",
+                                            "ply\nformat ascii 1.0\nelement junk 7777777777777777777\n"
+                                            "element vertex 3\nproperty float x\nproperty float y\n"
+                                            "property float z\nelement face 1\n"
+                                            "property list uchar int vertex_indices\nend_header\n"
+                                            "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+  EXPECT_EQ(m.vertices.size(), 3u);
+  EXPECT_EQ(m.triangles.size(), 1u);
+}
+
 TEST_F(MeshIoTest, PlyBinaryBothByteOrdersBothPrecisions) {
   for (bool big : {false, true})
     for (bool dbl : {false, true}) {
