@@ -2,6 +2,7 @@
 // Helpers shared by the tests (tested themselves in test_geometry.cpp).
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -75,6 +76,50 @@ kdet_fcl::TriangleMesh<To> convert(const kdet_fcl::TriangleMesh<From>& m) {
   r.triangles = m.triangles;
   for (const auto& v : m.vertices) r.vertices.push_back({To(v.x), To(v.y), To(v.z)});
   return r;
+}
+
+/// Two triangulated sheets in (nearly) the same plane: sheet A flat at z = 0, sheet B shifted by a
+/// fraction of a cell, its vertices at z = 0 exactly, one or a few ulps off, 1e-9 off, or clearly
+/// off (a mix per vertex), so that most candidate pairs are touching, coplanar or within
+/// rounding of the other's plane: the cases where a plane-side filter that drops too much would
+/// lose true pairs. `tilt` adds a slope to sheet B so that its triangles cross A's plane.
+template <class S>
+kdet_fcl::TriangleMesh<S> nearCoplanarSheets(int n, bool tilt, std::uint64_t seed,
+                                             bool sheet_a = true, bool sheet_b = true) {
+  std::mt19937_64 rng(seed);
+  kdet_fcl::TriangleMesh<S> m;
+  const S h = S(1) / S(n);
+  auto offset = [&](S base) {
+    switch (rng() % 7) {
+      case 0: return base;
+      case 1: return std::nextafter(base, S(1));
+      case 2: return std::nextafter(base, S(-1));
+      case 3: return std::nextafter(std::nextafter(base, S(1)), S(1));
+      case 4: return base + S(1e-9);
+      case 5: return base - S(1e-9);
+      default: return base + S(rng() % 2 ? 0.01 : -0.01);
+    }
+  };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const S x = S(i) * h, y = S(j) * h;
+      if (sheet_a) {
+        m.addTriangle({x, y, 0}, {x + h, y, 0}, {x, y + h, 0});
+        m.addTriangle({x + h, y, 0}, {x + h, y + h, 0}, {x, y + h, 0});
+      }
+      if (sheet_b) {
+        const S bx = x + S(0.5) * h, by = y + S(0.25) * h;
+        auto z = [&](S px, S py) {
+          const S base = tilt ? (px - S(0.5)) * S(1e-6) + (py - S(0.5)) * S(3e-7) : S(0);
+          return offset(base);
+        };
+        m.addTriangle({bx, by, z(bx, by)}, {bx + h, by, z(bx + h, by)},
+                      {bx, by + h, z(bx, by + h)});
+        m.addTriangle({bx + h, by, z(bx + h, by)}, {bx + h, by + h, z(bx + h, by + h)},
+                      {bx, by + h, z(bx, by + h)});
+      }
+    }
+  return m;
 }
 
 }  // namespace kdet_test

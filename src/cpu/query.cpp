@@ -236,6 +236,8 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
           [&](std::uint32_t j, double dj) { return dj > di ? 1 : (dj == di ? (j > ui ? 1 : 0) : -1); },
           [&](std::uint32_t j) {
             if (m.sharesVertex(ui, j)) return true;  // adjacent, not colliding
+            // The compact box test's survivors, confirmed on the double boxes (scanCandidates).
+            if (!detail::boxesOverlap(h.boxes[i], h.boxes[j])) return true;
             ++st.triangle_tests;
             // Lower index first: the plain (inexact) predicates are not symmetric, and this is
             // the order bruteForceIntersectSelf uses.
@@ -247,7 +249,7 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
             out.push_back(p);
             return !(max_pairs > 0 && out.size() >= max_pairs);
           },
-          st);
+          st, 0, 0, false);
       if (!go) return;
     }
   });

@@ -16,11 +16,18 @@ namespace cpu {
 /// too small, since cells list their triangles by decreasing diameter), whose boxes overlap the
 /// query box, seen from the canonical cell of that overlap only. Calls test_and_emit(j) for each;
 /// stops (returns false) when it returns false.
+/// The box test runs first on the entries' compact boxes, rounded outward, which keep every pair
+/// whose double boxes overlap and perhaps a few whose boxes are a rounding step apart; the pairs
+/// it keeps are confirmed on the double boxes. So every predicate sees exactly the pairs whose
+/// boxes overlap, as the CUDA backend does: a plain predicate, or the exact one outside its
+/// validity range (subnormal coordinates, docs/numerics.md), may accept a pair across a gap
+/// between the boxes, and no query reports such a pair. `confirm` = false leaves that
+/// confirmation to test_and_emit (the self query runs its cheaper adjacency test first).
 template <class S, class Accept, class TestEmit>
 bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<double>& qbox0,
                     double dq,
                     Accept&& accept, TestEmit&& test_and_emit, QueryStats& st,
-                    double grow_abs = 0, double grow_rel = 0) {
+                    double grow_abs = 0, double grow_rel = 0, bool confirm = true) {
   for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
     if (!h.levelOccupied(L)) continue;
     // Optionally grow the query box per level by grow_abs + grow_rel * (cell edge of level L):
@@ -57,6 +64,7 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
               continue;
             ++st.box_tests;
             if (!detail::entryBoxesOverlap(qe, e.box)) continue;
+            if (confirm && !detail::boxesOverlap(qbox, h.boxes[e.id])) continue;
             if (!test_and_emit(e.id)) return false;
           }
         }
