@@ -4,7 +4,6 @@
 
 #include <random>
 
-#include "kdet_fcl/detail/exact_predicates.h"
 #include "test_util.h"
 
 using namespace kdet_fcl;
@@ -47,9 +46,7 @@ std::vector<TrianglePair> boxOverlapping(const std::vector<TrianglePair>& all,
                                          std::size_t* disjoint = nullptr) {
   auto box = [](const TriangleMesh<S>& m, std::uint32_t i) {
     const Triangle& t = m.triangles[i];
-    return detail::triangleBox<double>(detail::toDouble(m.vertices[t[0]]),
-                                       detail::toDouble(m.vertices[t[1]]),
-                                       detail::toDouble(m.vertices[t[2]]));
+    return detail::triangleBox<double>(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
   };
   std::vector<TrianglePair> r;
   for (const auto& p : all) {
