@@ -542,31 +542,23 @@ __global__ void __launch_bounds__(kQueryBlock)
   }
 }
 
-/// detail::orient3dFilterSign (the filter of orient3dSign() alone, exact_predicates.h) on the
-/// mesh's coordinates converted to double exactly, as trianglesIntersectWith does: +1 or -1 only
-/// where that is the exact sign of orient3d(a, b, c, d), 0 where it cannot tell (the exact
-/// predicate would fall back to expansion arithmetic, which this kernel never runs).
-template <class S>
-__device__ __forceinline__ int orient3dFilterSign(const Vec3<S>& pa, const Vec3<S>& pb,
-                                                  const Vec3<S>& pc, const Vec3<S>& pd) {
-  return detail::orient3dFilterSign(detail::toDouble(pa), detail::toDouble(pb),
-                                    detail::toDouble(pc), detail::toDouble(pd));
-}
-
 /// True when the filter proves all three vertices of triangle p strictly on one side of the
-/// plane of triangle q (orient3d(q0, q1, q2, p_k) all +1 or all -1): exactly a rejection of
-/// trianglesIntersectWith<ExactKernel>, whose first two tests are these signs, exactly. The
+/// plane of triangle q (orient3d(q0, q1, q2, p_k) all +1 or all -1, by detail::orient3dFilterSign
+/// on the plane prepared once, on the coordinates converted to double exactly, as
+/// trianglesIntersectWith does): then trianglesIntersectWith<ExactKernel>, whose first test is
+/// these exact signs, rejects the pair. A sign the filter cannot prove (0) keeps the pair. The
 /// vertices are loaded where they are used, so few stay live in registers.
 template <class S>
 __device__ __forceinline__ bool strictlyOneSide(const Vec3<S>* __restrict__ qv,
                                                 const std::uint32_t* __restrict__ qt,
                                                 const Vec3<S>* __restrict__ pv,
                                                 const std::uint32_t* __restrict__ pt) {
-  const Vec3<S> q0 = qv[qt[0]], q1 = qv[qt[1]], q2 = qv[qt[2]];
-  const int s = orient3dFilterSign(q0, q1, q2, pv[pt[0]]);
+  const detail::OrientPlane plane = detail::orientPlane(
+      detail::toDouble(qv[qt[0]]), detail::toDouble(qv[qt[1]]), detail::toDouble(qv[qt[2]]));
+  const int s = detail::orient3dFilterSign(plane, detail::toDouble(pv[pt[0]]));
   if (s == 0) return false;
-  if (orient3dFilterSign(q0, q1, q2, pv[pt[1]]) != s) return false;
-  return orient3dFilterSign(q0, q1, q2, pv[pt[2]]) == s;
+  if (detail::orient3dFilterSign(plane, detail::toDouble(pv[pt[1]])) != s) return false;
+  return detail::orient3dFilterSign(plane, detail::toDouble(pv[pt[2]])) == s;
 }
 
 /// Between phases 1 and 2 (Predicate::Exact only): one thread per candidate drops the pair when

@@ -14,6 +14,7 @@ using kdet_fcl::Vec3;
 using kdet_fcl::detail::orient2dSign;
 using kdet_fcl::detail::orient3dFilterSign;
 using kdet_fcl::detail::orient3dSign;
+using kdet_fcl::detail::orientPlane;
 using kdet_fcl::detail::exact::orient2dSignExact;
 using kdet_fcl::detail::exact::orient3dSignExact;
 using V = Vec3<double>;
@@ -60,6 +61,12 @@ void checkCase(const V& a, const V& b, const V& c, const V& d, Tally* t3 = nullp
   // The filter alone (the GPU plane filter's test) may abstain (0) but never proves a wrong sign.
   const int f3 = orient3dFilterSign(a, b, c, d);
   if (f3 != 0) ASSERT_EQ(f3, r3);
+  // The plane of (a, b, c) prepared once (the triangle test's form, and the GPU plane filter's):
+  // the same exact sign, and a filter that never proves a wrong one.
+  const auto plane = orientPlane(a, b, c);
+  ASSERT_EQ(orient3dSign(plane, a, b, c, d), r3);
+  const int fp = orient3dFilterSign(plane, d);
+  if (fp != 0) ASSERT_EQ(fp, r3);
   // Permutation parity: swapping two rows flips the sign; a cyclic shift of (a,b,c,d) of an
   // orientation of 4 points flips it too (odd permutation of 4 elements).
   ASSERT_EQ(orient3dSign(b, a, c, d), -r3);
@@ -337,22 +344,26 @@ TEST(Predicates, FilterProvesFarSignsAndAbstainsNearThePlane) {
   // proven sign always equals the referee's.
   std::mt19937_64 rng(777);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
-  int proven = 0, abstained = 0;
+  int proven = 0, abstained = 0, proven_plane = 0, abstained_plane = 0;
   for (int it = 0; it < 2000; ++it) {
     const V a{U(rng), U(rng), U(rng)}, b{U(rng), U(rng), U(rng)}, c{U(rng), U(rng), U(rng)};
     const V far{U(rng), U(rng), U(rng)};
     checkCase(a, b, c, far);
     if (HasFatalFailure()) return;
     proven += orient3dFilterSign(a, b, c, far) != 0;
+    proven_plane += orient3dFilterSign(orientPlane(a, b, c), far) != 0;
     // A point on the plane up to rounding, then one ulp off: the filter cannot resolve it.
     V near = a + (b - a) * 0.25 + (c - a) * 0.5;
     near.z = std::nextafter(near.z, (it & 1) ? INFINITY : -INFINITY);
     checkCase(a, b, c, near);
     if (HasFatalFailure()) return;
     abstained += orient3dFilterSign(a, b, c, near) == 0;
+    abstained_plane += orient3dFilterSign(orientPlane(a, b, c), near) == 0;
   }
   EXPECT_GT(proven, 1900);
   EXPECT_GT(abstained, 1500);
+  EXPECT_GT(proven_plane, 1900);
+  EXPECT_GT(abstained_plane, 1500);
 }
 
 }  // namespace

@@ -279,6 +279,38 @@ TEST(TriangleIntersection, FloatMatchesDoubleOfSameValues) {
   EXPECT_LT(hits, 2900);
 }
 
+/// The normal form of the transversal test (tri_isect::loneVertex), on every sign pattern it can
+/// get (not all zero, not all equal and non-zero): after the optional negation the chosen vertex
+/// is on the non-negative side and the other two on the non-positive side, and the chosen vertex
+/// is off the plane whenever another vertex is on it (so the triangle meets the plane in the
+/// segment between its two edges at the chosen vertex).
+TEST(TriangleIntersection, LoneVertexNormalFormOfEverySignPattern) {
+  using kdet_fcl::detail::tri_isect::loneVertex;
+  int patterns = 0, negated = 0, zero_lone = 0;
+  for (int a = -1; a <= 1; ++a)
+    for (int b = -1; b <= 1; ++b)
+      for (int c = -1; c <= 1; ++c) {
+        const int s[3] = {a, b, c};
+        if (a == b && b == c) continue;  // all zero (coplanar) or strictly one-sided
+        int first = -1;
+        bool negate = false;
+        loneVertex(s, first, negate);
+        ASSERT_TRUE(first >= 0 && first < 3);
+        const int k = negate ? -1 : 1;
+        const int lone = k * s[first], o1 = k * s[(first + 1) % 3], o2 = k * s[(first + 2) % 3];
+        EXPECT_GE(lone, 0) << a << b << c;
+        EXPECT_LE(o1, 0) << a << b << c;
+        EXPECT_LE(o2, 0) << a << b << c;
+        if (o1 == 0 || o2 == 0) EXPECT_NE(lone, 0) << a << b << c;
+        ++patterns;
+        negated += negate;
+        zero_lone += lone == 0;
+      }
+  EXPECT_EQ(patterns, 24);
+  EXPECT_GT(negated, 0);
+  EXPECT_GT(zero_lone, 0);  // (0, -, -) and (0, +, +)
+}
+
 // ---------------------------------------------------------------- randomized cross-checks
 
 /// Small-integer proper triangles: lots of shared vertices, touching and coplanar configurations.

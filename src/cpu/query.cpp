@@ -70,6 +70,17 @@ QueryResult runChunks(std::size_t num_chunks, int threads, std::size_t max_pairs
   return res;
 }
 
+/// The exact test of one candidate pair, out of line: inlined, its three kernels would crowd the
+/// scan loop it is called from (the compiler then stops inlining the loop's own small helpers).
+template <class S>
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((noinline))
+#endif
+bool testPair(Predicate predicate, const Vec3<S>& p0, const Vec3<S>& p1, const Vec3<S>& p2,
+              const Vec3<S>& q0, const Vec3<S>& q1, const Vec3<S>& q2) {
+  return detail::trianglesIntersect(predicate, p0, p1, p2, q0, q1, q2);
+}
+
 }  // namespace
 
 template <class S>
@@ -148,8 +159,8 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
     return QueryResult{};
 
   auto exact = [&](const Tri& a, std::uint32_t j) {
-    return detail::trianglesIntersect(options.predicate, a.p[0], a.p[1], a.p[2], vb[tb[j][0]],
-                                      vb[tb[j][1]], vb[tb[j][2]]);
+    return testPair(options.predicate, a.p[0], a.p[1], a.p[2], vb[tb[j][0]], vb[tb[j][1]],
+                    vb[tb[j][2]]);
   };
 
   const std::size_t chunks_a = (na + kChunk - 1) / kChunk;
@@ -243,8 +254,8 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
             // the order bruteForceIntersectSelf uses.
             const TrianglePair p = ui < j ? TrianglePair{ui, j} : TrianglePair{j, ui};
             const Triangle &ta = t[p.a], &tb = t[p.b];
-            if (!detail::trianglesIntersect(options.predicate, v[ta[0]], v[ta[1]], v[ta[2]],
-                                            v[tb[0]], v[tb[1]], v[tb[2]]))
+            if (!testPair(options.predicate, v[ta[0]], v[ta[1]], v[ta[2]], v[tb[0]], v[tb[1]],
+                          v[tb[2]]))
               return true;
             out.push_back(p);
             return !(max_pairs > 0 && out.size() >= max_pairs);

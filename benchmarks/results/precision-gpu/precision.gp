@@ -1,11 +1,11 @@
 # gnuplot precision.gp (in this folder) -> precision.png
 set terminal pngcairo size 1400,650 noenhanced font ',10'
 set output 'precision.png'
-set multiplot layout 1,2 title "kdet_fcl predicate modes: time vs errors, one point per scene (CPU: Intel(R) Xeon(R) Processor; GPU: NVIDIA H200, compute capability 9.0, 143155 MiB)"
+set multiplot layout 1,2 title "kdet_fcl predicate modes: time vs errors, one point per scene (CPU: Intel(R) Xeon(R) Processor; GPU: NVIDIA H100 80GB HBM3, compute capability 9.0, 81079 MiB)"
 set logscale x
 set logscale y
 set grid
-set xrange [0.1195:2.058]
+set xrange [0.1226:2.042]
 set yrange [0.7:2.38e+05]
 set xtics (0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.5, 2, 3, 5, 10, 20, 50, 100)
 set xlabel 'time per query / time of Predicate::Exact (same scene, mesh precision, backend)'

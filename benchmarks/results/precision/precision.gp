@@ -5,7 +5,7 @@ set multiplot layout 1,2 title "kdet_fcl predicate modes: time vs errors, one po
 set logscale x
 set logscale y
 set grid
-set xrange [0.1142:1.966]
+set xrange [0.1283:2.035]
 set yrange [0.7:2.38e+05]
 set xtics (0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.5, 2, 3, 5, 10, 20, 50, 100)
 set xlabel 'time per query / time of Predicate::Exact (same scene, mesh precision, backend)'

@@ -241,15 +241,16 @@ KDET_FCL_HD_NOINLINE bool segmentSegment(const Vec3<double>& p0, const Vec3<doub
   return alo <= bhi && blo <= ahi;
 }
 
-/// Proper triangle vs proper triangle.
+/// Whether all three signs are equal and non-zero (three points strictly on one side of a plane).
+KDET_HD_INLINE bool strictlyOneSide(const int s[3]) {
+  return s[0] != 0 && s[0] == s[1] && s[1] == s[2];
+}
+
+/// Proper triangle vs proper triangle, given sp[i] = orient3d(Q, P.v[i]) and
+/// sq[i] = orient3d(P, Q.v[i]), neither triple strictly one-sided.
 template <class K>
-KDET_HD_INLINE bool properProper(const Shape& P, const Shape& Q) {
-  // Signs of P's vertices against Q's plane, and of Q's vertices against P's plane.
-  int sp[3], sq[3];
-  for (int i = 0; i < 3; ++i) sp[i] = K::orient3d(Q.v[0], Q.v[1], Q.v[2], P.v[i]);
-  if (sp[0] == sp[1] && sp[1] == sp[2] && sp[0] != 0) return false;  // P strictly on one side
-  for (int i = 0; i < 3; ++i) sq[i] = K::orient3d(P.v[0], P.v[1], P.v[2], Q.v[i]);
-  if (sq[0] == sq[1] && sq[1] == sq[2] && sq[0] != 0) return false;  // Q strictly on one side
+KDET_HD_INLINE bool properProperSigns(const Shape& P, const Shape& Q, const int sp[3],
+                                      const int sq[3]) {
   // The triangles meet iff some closed edge of one meets the other closed triangle. Non-coplanar:
   // both meet the line L of the two planes in closed intervals whose endpoints lie on their edges;
   // overlapping intervals contain an endpoint of one in the other. Coplanar: two convex polygons
@@ -263,6 +264,81 @@ KDET_HD_INLINE bool properProper(const Shape& P, const Shape& Q) {
     if (segmentTriangleSigns<K>(Q.v[i], Q.v[j], P, sq[i], sq[j])) return true;
   }
   return false;
+}
+
+/// Proper triangle vs proper triangle.
+template <class K>
+KDET_HD_INLINE bool properProper(const Shape& P, const Shape& Q) {
+  // Signs of P's vertices against Q's plane, and of Q's vertices against P's plane.
+  int sp[3], sq[3];
+  K::orient3dSides(Q.v[0], Q.v[1], Q.v[2], P.v, sp);
+  if (strictlyOneSide(sp)) return false;  // P strictly on one side
+  K::orient3dSides(P.v[0], P.v[1], P.v[2], Q.v, sq);
+  if (strictlyOneSide(sq)) return false;  // Q strictly on one side
+  return properProperSigns<K>(P, Q, sp, sq);
+}
+
+/// For a triangle whose vertices have the orientations s[0..2] against the other triangle's plane
+/// (not all zero, not all equal and non-zero): the vertex `first` that is alone on its side, and
+/// whether the signs must be negated (the other plane reversed) so that it lies on the
+/// non-negative side and the other two on the non-positive side. When another vertex is on the
+/// plane, the lone vertex is a non-zero one; only a zero vertex with the other two strictly on
+/// one side is the lone vertex itself. Then the triangle meets the plane in the closed segment
+/// between its edges (first, first+1) and (first, first+2) (a point when the lone vertex is on it).
+KDET_HD_INLINE void loneVertex(const int s[3], int& first, bool& negate) {
+  int pos = 0, neg = 0;
+  for (int i = 0; i < 3; ++i) {
+    pos += s[i] > 0;
+    neg += s[i] < 0;
+  }
+  first = 0;
+  negate = false;
+  for (int i = 0; i < 3; ++i)
+    if (pos == 1 && s[i] > 0) {  // the others are <= 0
+      first = i;
+      return;
+    }
+  for (int i = 0; i < 3; ++i)
+    if (neg == 1 && s[i] < 0) {  // the others are >= 0
+      first = i;
+      negate = true;
+      return;
+    }
+  for (int i = 0; i < 3; ++i)
+    if (s[i] == 0) {  // the other two share a sign
+      first = i;
+      negate = pos > 0;
+      return;
+    }
+}
+
+/// Two proper triangles in different planes, neither strictly on one side of the other's plane,
+/// given sp[i] = orient3d(Q, P[i]) and sq[i] = orient3d(P, Q[i]) (not all zero: the planes
+/// differ). Each triangle meets the line L common to both planes in a closed segment; they meet iff
+/// the two segments overlap. With each triangle's lone vertex first and the planes oriented so that
+/// it lies on the non-negative side of the other's (loneVertex), the overlap is two orientation
+/// signs (Guigue and Devillers, "Fast and robust triangle-triangle overlap test using orientation
+/// predicates", J. Graphics Tools 8(1), 2003): the segments overlap iff neither ends before the
+/// other begins along L. Two more predicates instead of the up to eighteen of the edge-by-edge
+/// tests of properProperSigns.
+template <class K>
+KDET_HD_INLINE bool transversalProper(const Vec3<double> P[3], const Vec3<double> Q[3],
+                                      const int sp[3], const int sq[3]) {
+  int fp = 0, fq = 0;
+  bool np = false, nq = false;
+  loneVertex(sp, fp, np);
+  // Q's vertices, their order reversed (its plane flipped) when P's signs must be negated.
+  int q[3] = {0, 1, 2};
+  if (np) q[1] = 2, q[2] = 1;
+  const int s2[3] = {sq[q[0]], sq[q[1]], sq[q[2]]};
+  loneVertex(s2, fq, nq);
+  const Vec3<double>& a = P[fp];
+  const Vec3<double>& b = P[(fp + (nq ? 2 : 1)) % 3];  // P reversed when Q's signs must be negated
+  const Vec3<double>& c = P[(fp + (nq ? 1 : 2)) % 3];
+  const Vec3<double>& d = Q[q[fq]];
+  const Vec3<double>& e = Q[q[(fq + 1) % 3]];
+  const Vec3<double>& f = Q[q[(fq + 2) % 3]];
+  return K::orient3d(b, d, a, e) <= 0 && K::orient3d(a, d, c, f) <= 0;
 }
 
 /// Any classified shape vs any other; A.kind <= B.kind in the order Point < Segment < Proper is
@@ -291,9 +367,17 @@ KDET_HD_INLINE bool shapesIntersect(const Shape& A0, const Shape& B0) {
 
 /// Orientation signs decided exactly (the default: filtered, with an exact fallback).
 struct ExactKernel {
+  static constexpr bool kExactSigns = true;
   static KDET_HD_INLINE int orient3d(const Vec3<double>& a, const Vec3<double>& b,
                                      const Vec3<double>& c, const Vec3<double>& d) {
     return orient3dSign(a, b, c, d);
+  }
+  /// s[i] = orient3d(a, b, c, p[i]), the plane's filter products computed once.
+  static KDET_HD_INLINE void orient3dSides(const Vec3<double>& a, const Vec3<double>& b,
+                                           const Vec3<double>& c, const Vec3<double> p[3],
+                                           int s[3]) {
+    const OrientPlane plane = orientPlane(a, b, c);
+    for (int i = 0; i < 3; ++i) s[i] = orient3dSign(plane, a, b, c, p[i]);
   }
   static KDET_HD_INLINE int orient2d(double ax, double ay, double bx, double by, double cx,
                                      double cy) {
@@ -306,6 +390,7 @@ struct ExactKernel {
 /// the "float" and "double" end of the speed/accuracy trade (docs/numerics.md measures it).
 template <class T>
 struct PlainKernel {
+  static constexpr bool kExactSigns = false;
   static KDET_HD_INLINE int sign(T v) { return v > T(0) ? 1 : (v < T(0) ? -1 : 0); }
   static KDET_HD_INLINE int orient3d(const Vec3<double>& a, const Vec3<double>& b,
                                      const Vec3<double>& c, const Vec3<double>& d) {
@@ -314,6 +399,12 @@ struct PlainKernel {
     const T cx = T(c.x) - ax, cy = T(c.y) - ay, cz = T(c.z) - az;
     const T dx = T(d.x) - ax, dy = T(d.y) - ay, dz = T(d.z) - az;
     return sign((by * cz - bz * cy) * dx + (bz * cx - bx * cz) * dy + (bx * cy - by * cx) * dz);
+  }
+  /// s[i] = orient3d(a, b, c, p[i]) (the same evaluation, point by point).
+  static KDET_HD_INLINE void orient3dSides(const Vec3<double>& a, const Vec3<double>& b,
+                                           const Vec3<double>& c, const Vec3<double> p[3],
+                                           int s[3]) {
+    for (int i = 0; i < 3; ++i) s[i] = orient3d(a, b, c, p[i]);
   }
   static KDET_HD_INLINE int orient2d(double ax, double ay, double bx, double by, double cx,
                                      double cy) {
@@ -326,20 +417,29 @@ template <class K, class S>
 KDET_HD_INLINE bool trianglesIntersectWith(const Vec3<S>& p0, const Vec3<S>& p1,
                                            const Vec3<S>& p2, const Vec3<S>& q0,
                                            const Vec3<S>& q1, const Vec3<S>& q2) {
-  const Vec3<double> P0 = toDouble(p0), P1 = toDouble(p1), P2 = toDouble(p2);
-  const Vec3<double> Q0 = toDouble(q0), Q1 = toDouble(q1), Q2 = toDouble(q2);
+  const Vec3<double> P[3] = {toDouble(p0), toDouble(p1), toDouble(p2)};
+  const Vec3<double> Q[3] = {toDouble(q0), toDouble(q1), toDouble(q2)};
   // Fast rejection before any classification (most candidate pairs end here): all of one
   // triangle strictly on one side of the other's plane. A degenerate triangle has no plane: its
   // orientations are all zero, so it never rejects here and is handled below.
-  const int a0 = K::orient3d(Q0, Q1, Q2, P0);
-  if (a0 != 0 && K::orient3d(Q0, Q1, Q2, P1) == a0 && K::orient3d(Q0, Q1, Q2, P2) == a0)
-    return false;
-  const int b0 = K::orient3d(P0, P1, P2, Q0);
-  if (b0 != 0 && K::orient3d(P0, P1, P2, Q1) == b0 && K::orient3d(P0, P1, P2, Q2) == b0)
-    return false;
-  const tri_isect::Shape P = tri_isect::classify<K>(P0, P1, P2);
-  const tri_isect::Shape Q = tri_isect::classify<K>(Q0, Q1, Q2);
-  return tri_isect::shapesIntersect<K>(P, Q);
+  int sp[3], sq[3];
+  K::orient3dSides(Q[0], Q[1], Q[2], P, sp);
+  if (tri_isect::strictlyOneSide(sp)) return false;
+  K::orient3dSides(P[0], P[1], P[2], Q, sq);
+  if (tri_isect::strictlyOneSide(sq)) return false;
+  // A degenerate triangle's orientations are all exactly zero, and so are those of a triangle in
+  // the other's plane: some non-zero sign on each side means two proper triangles in different
+  // planes. (Exact signs only: a plain kernel's rounding can make a degenerate triangle look
+  // proper, so those keep the classification below.)
+  if (K::kExactSigns && (sp[0] != 0 || sp[1] != 0 || sp[2] != 0) &&
+      (sq[0] != 0 || sq[1] != 0 || sq[2] != 0))
+    return tri_isect::transversalProper<K>(P, Q, sp, sq);
+  const tri_isect::Shape SP = tri_isect::classify<K>(P[0], P[1], P[2]);
+  const tri_isect::Shape SQ = tri_isect::classify<K>(Q[0], Q[1], Q[2]);
+  // Two proper triangles keep their vertices in order, so the signs above are theirs.
+  if (SP.kind == tri_isect::Kind::Proper && SQ.kind == tri_isect::Kind::Proper)
+    return tri_isect::properProperSigns<K>(SP, SQ, sp, sq);
+  return tri_isect::shapesIntersect<K>(SP, SQ);
 }
 
 /// Whether the closed triangles (p0, p1, p2) and (q0, q1, q2) share at least one point, decided
