@@ -476,14 +476,17 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G);
   if (i >= n) return;
   const double di = M.diam[i];
-  const std::uint32_t ti[3] = {M.t[3 * i], M.t[3 * i + 1], M.t[3 * i + 2]};
-  const Vec3<S> vi[3] = {M.v[ti[0]], M.v[ti[1]], M.v[ti[2]]};
   scanCandidatesGroup(
       M, cInfo(0), boxOf(M, i), di, tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
         // Adjacent pairs (a shared vertex index or coordinate) never reach phase 2: on a
-        // connected mesh they are most of the box-overlapping pairs.
+        // connected mesh they are most of the box-overlapping pairs. Triangle i's indices and
+        // vertices are (re)loaded here, where they are needed (cache hits), instead of being
+        // held in registers through the whole scan, where a register cap would spill them.
+        const std::uint32_t ti[3] = {__ldg(M.t + 3 * i), __ldg(M.t + 3 * i + 1),
+                                     __ldg(M.t + 3 * i + 2)};
+        const Vec3<S> vi[3] = {M.v[ti[0]], M.v[ti[1]], M.v[ti[2]]};
         const std::uint32_t tj[3] = {M.t[3 * j], M.t[3 * j + 1], M.t[3 * j + 2]};
         bool adjacent = false;
         for (int a = 0; a < 3; ++a)
@@ -1381,14 +1384,17 @@ int tileSize() {
 }
 
 /// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
-/// KDET_FCL_CUDA_MINBLOCKS = 1 (no cap), 8 or 12 (default 12: at most 40 registers, about 3x the
-/// occupancy of the uncapped ~100-register kernel; measured 5-16% faster phase 1 despite the
-/// spills, benchmarks/RESULTS-gpu.md "Optimization round 2"). Read once.
+/// KDET_FCL_CUDA_MINBLOCKS = 1 (no cap, ~100 registers), 8 (default: at most 64 registers) or 12
+/// (at most 40). The 40-register kernel has twice the occupancy of the 64-register one but spills
+/// its loop state to local memory on every cell (ncu: 30M local requests on the cloth ball), so
+/// the 64-register kernel's phase 1 was measured 15-23% faster on every scene
+/// (benchmarks/RESULTS-gpu.md, "Register cap of the candidate search"); both beat the uncapped
+/// kernel ("Optimization round 2"). Read once.
 int minBlocksKnob() {
   static const int mb = [] {
     const char* e = std::getenv("KDET_FCL_CUDA_MINBLOCKS");
-    const int v = (e && *e) ? std::atoi(e) : 12;
-    return (v == 1 || v == 8 || v == 12) ? v : 12;
+    const int v = (e && *e) ? std::atoi(e) : 8;
+    return (v == 1 || v == 8 || v == 12) ? v : 8;
   }();
   return mb;
 }

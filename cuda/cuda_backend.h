@@ -24,7 +24,9 @@
 //
 // Knobs (environment, for tests and tuning): KDET_FCL_CUDA_PAIR_CAPACITY=k caps the first pass's
 // candidate and pair buffers at k (forces the overflow path); KDET_FCL_CUDA_TILE=1|4|8|16|32
-// sets the lanes per query triangle of the candidate search (default 8, read once);
+// sets the lanes per query triangle of the candidate search (default 8, read once) and
+// KDET_FCL_CUDA_MINBLOCKS=1|8|12 its register cap (none, 64 or 40 registers; default 8 (64), read
+// once);
 // KDET_FCL_CUDA_PLANE_FILTER=0 turns off the plane filter between the candidate search and the
 // exact tests (default on, Predicate::Exact only; read at every query) and
 // KDET_FCL_CUDA_FILTER_MINBLOCKS=6 caps the filter kernel at 40 registers (default uncapped;

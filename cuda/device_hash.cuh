@@ -179,6 +179,10 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
                                                     Emit&& emit) {
   constexpr unsigned int G = Tile::num_threads();
   const unsigned int lane = tile.thread_rank();
+  // Only the clipped box stays live through the scan: every entry's box lies inside info.bounds
+  // (the exact union of the triangles' boxes), so against an entry box e the clipped box gives the
+  // same overlap test (q ∩ e = q ∩ bounds ∩ e) and the same canonical cell (max(q.lo, e.lo) =
+  // max(q.lo, bounds.lo, e.lo) per axis), and twelve fewer registers are held under the cap.
   const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, info.bounds);
   if (detail::isEmpty(clipped)) return;
   // Cells list their triangles by decreasing sizeKey (cuda_backend.cu); every size rule needs
@@ -205,8 +209,8 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
               smaller = sizeKeyOf(dj) < qkey;
               if (!smaller && accept(j, dj)) {
                 const detail::Aabb<double> eb = boxOf(h, j);
-                if (detail::boxesOverlap(qbox, eb) &&
-                    detail::isCanonicalCell(qbox, eb, scale, info.grid, x, y, z))
+                if (detail::boxesOverlap(clipped, eb) &&
+                    detail::isCanonicalCell(clipped, eb, scale, info.grid, x, y, z))
                   emit(j);
               }
             }
