@@ -61,6 +61,19 @@ constexpr double kFilterMinPermanent = 1e-250;
 /// Absolute value without <cmath> overload questions on the device.
 KDET_HD_INLINE double absd(double a) { return a < 0 ? -a : a; }
 
+/// The orient3d filter's verdict from a computed triple-product expansion and its permanent (the
+/// same sum with every product taken in absolute value): +1 or -1 where the sign is proven, 0
+/// where the exact path must decide. The bound and its validity range are argued at
+/// orient3dFilterSign(); every orient3d filter shares them through this function.
+KDET_HD_INLINE int orient3dFilterVerdict(double det, double permanent) {
+  const double bound = 10.0 * kUnitRoundoff * permanent;
+  if (permanent >= kFilterMinPermanent && permanent <= 1e308) {
+    if (det > bound) return 1;
+    if (-det > bound) return -1;
+  }
+  return 0;
+}
+
 /// Fused multiply-add a*b+c with a single rounding; exactness of twoProduct() depends on it, so it
 /// must be a real fma (CUDA's fma and C++'s std::fma both are, never a contracted expression).
 KDET_HD_INLINE double fmad(double a, double b, double c) {
@@ -258,12 +271,7 @@ KDET_HD_INLINE int orient3dFilterSign(const Vec3<double>& a, const Vec3<double>&
   // contraction (fewer roundings) and the rounding of the bound. Inside the validity range no
   // product underflows; tiny permanents (possible underflow outside it) and non-finite values go to
   // the exact path anyway.
-  const double bound = 10.0 * exact::kUnitRoundoff * permanent;
-  if (permanent >= exact::kFilterMinPermanent && permanent <= 1e308) {
-    if (det > bound) return 1;
-    if (-det > bound) return -1;
-  }
-  return 0;
+  return exact::orient3dFilterVerdict(det, permanent);
 }
 
 /// The plane of a triangle (a, b, c), prepared for the orientation of many points against it:
@@ -307,12 +315,7 @@ KDET_HD_INLINE int orient3dFilterSign(const OrientPlane& p, const Vec3<double>& 
   const double det = wx * p.nx + wy * p.ny + wz * p.nz;
   const double permanent =
       exact::absd(wx) * p.mx + exact::absd(wy) * p.my + exact::absd(wz) * p.mz;
-  const double bound = 10.0 * exact::kUnitRoundoff * permanent;
-  if (permanent >= exact::kFilterMinPermanent && permanent <= 1e308) {
-    if (det > bound) return 1;
-    if (-det > bound) return -1;
-  }
-  return 0;
+  return exact::orient3dFilterVerdict(det, permanent);
 }
 
 /// The exact sign (-1, 0, +1) of det[b-a; c-a; d-a] (rows) = dot(cross(b-a, c-a), d-a): positive
