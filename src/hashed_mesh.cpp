@@ -16,8 +16,10 @@ namespace kdet_fcl {
 
 template <class S>
 struct HashedMesh<S>::Lazy {
-  std::mutex mutex;               // held while the CPU hash is rebuilt
-  std::atomic<bool> fresh{false};  // the CPU hash matches mesh_
+  std::mutex mutex;               // held while the CPU hash is rebuilt or extended
+  std::atomic<bool> fresh{false};  // the CPU hash's per-triangle data match mesh_
+  // With `fresh`: the lowest level whose cells are in the hash's tables (coveredFrom()).
+  std::atomic<int> covered_from{detail::HierarchicalHash<S>::kNoTable};
 };
 
 template <class S>
@@ -113,22 +115,33 @@ void HashedMesh<S>::geometryChanged() {
 }
 
 template <class S>
-const detail::HierarchicalHash<S>& HashedMesh<S>::hash() const {
-  if (!lazy_->fresh.load(std::memory_order_acquire)) {
-    std::lock_guard<std::mutex> lock(lazy_->mutex);
-    if (!lazy_->fresh.load(std::memory_order_relaxed)) {
-      // Rebuilt in place (reusing its buffers). On an exception the hash is left empty and
-      // stale, so the next call rebuilds it; the mesh itself is untouched.
-      hash_->build(mesh_.vertices, mesh_.triangles, threads_);
-      lazy_->fresh.store(true, std::memory_order_release);
-    }
+const detail::HierarchicalHash<S>& HashedMesh<S>::hashFrom(int from_level) const {
+  // Fast path: current, and the tables reach down far enough. The tables' level never rises
+  // while `fresh` holds, so a stale read of covered_from only sends a caller to the lock.
+  if (lazy_->fresh.load(std::memory_order_acquire) &&
+      lazy_->covered_from.load(std::memory_order_acquire) <= from_level)
+    return *hash_;
+  std::lock_guard<std::mutex> lock(lazy_->mutex);
+  if (!lazy_->fresh.load(std::memory_order_relaxed)) {
+    // Rebuilt in place (reusing its buffers). On an exception the hash is left empty and
+    // stale, so the next call rebuilds it; the mesh itself is untouched.
+    hash_->build(mesh_.vertices, mesh_.triangles, threads_, from_level);
+    lazy_->covered_from.store(hash_->coveredFrom(), std::memory_order_release);
+    lazy_->fresh.store(true, std::memory_order_release);
+  } else if (hash_->coveredFrom() > from_level) {
+    // Adds a table for the missing levels; the tables built before are not touched, so
+    // concurrent lookups on the levels they cover (which their callers asked for) go on. On an
+    // exception the hash is as before (current, with fewer levels), and so is covered_from.
+    hash_->cover(from_level, threads_);
+    lazy_->covered_from.store(hash_->coveredFrom(), std::memory_order_release);
   }
   return *hash_;
 }
 
 template <class S>
 bool HashedMesh<S>::cpuHashFresh() const {
-  return lazy_->fresh.load(std::memory_order_acquire);
+  return lazy_->fresh.load(std::memory_order_acquire) &&
+         lazy_->covered_from.load(std::memory_order_acquire) == 0;
 }
 
 template <class S>

@@ -50,7 +50,7 @@ void expectEveryTriangleInItsCells(const HashedMesh<S>& hm) {
           int found = 0;
           const detail::EntryBox expectBox = detail::entryBox(h.boxes[i], h.grid.origin);
           for (std::uint32_t k = 0; k < s->count; ++k) {
-            const auto& e = h.entries[s->begin + k];
+            const auto& e = h.entriesOf(h.level[i])[s->begin + k];
             if (e.id != i) continue;
             ++found;
             EXPECT_EQ(e.diameter, h.diameter[i]);
@@ -71,8 +71,8 @@ void expectEveryTriangleInItsCells(const HashedMesh<S>& hm) {
           EXPECT_EQ(found, 1) << "triangle " << i;
           // Largest first, ties by increasing id: a lookup stops at the first too-small triangle.
           for (std::uint32_t k = 1; k < s->count; ++k) {
-            const auto& p = h.entries[s->begin + k - 1];
-            const auto& e = h.entries[s->begin + k];
+            const auto& p = h.entriesOf(h.level[i])[s->begin + k - 1];
+            const auto& e = h.entriesOf(h.level[i])[s->begin + k];
             EXPECT_TRUE(p.diameter > e.diameter || (p.diameter == e.diameter && p.id < e.id));
           }
         }
@@ -80,7 +80,7 @@ void expectEveryTriangleInItsCells(const HashedMesh<S>& hm) {
   std::size_t expected_entries = 0;
   for (std::size_t i = 0; i < hm.numTriangles(); ++i)
     expected_entries += std::size_t(detail::cellRange(h.boxes[i], h.level[i], h.grid).count());
-  EXPECT_EQ(h.entries.size(), expected_entries);  // and nothing else
+  EXPECT_EQ(h.numEntries(), expected_entries);  // and nothing else
 }
 
 }  // namespace
@@ -248,10 +248,10 @@ TEST(HashedMesh, RejectsBadInputAndKeepsState) {
 TEST(HashedMesh, PoseChangesDoNotRehashDeformationsDo) {
   HashedMesh<double> hm(makeSphere<double>({0, 0, 0}, 1.0, 16, 8));
   const auto v0 = hm.version();
-  const auto* entries = hm.hash().entries.data();
+  const auto* entries = hm.hash().entriesOf(0);
   hm.setPose(makeTransform<double>({0, 1, 0}, 0.5, {1, 2, 3}));
   EXPECT_EQ(hm.version(), v0);
-  EXPECT_EQ(hm.hash().entries.data(), entries);  // the same table, untouched
+  EXPECT_EQ(hm.hash().entriesOf(0), entries);  // the same table, untouched
   auto v = hm.mesh().vertices;
   for (auto& p : v) p.x *= 2;
   hm.updateVertices(v);
@@ -266,12 +266,7 @@ namespace {
 /// The whole layout of a hierarchy: every entry in table order, and every cell's slot.
 template <class S>
 void expectSameLayout(const detail::HierarchicalHash<S>& a, const detail::HierarchicalHash<S>& b) {
-  ASSERT_EQ(a.entries.size(), b.entries.size());
-  for (std::size_t k = 0; k < a.entries.size(); ++k) {
-    ASSERT_EQ(a.entries[k].id, b.entries[k].id) << k;
-    ASSERT_EQ(a.entries[k].lo_mask, b.entries[k].lo_mask) << k;
-    ASSERT_EQ(std::memcmp(&a.entries[k].box, &b.entries[k].box, sizeof a.entries[k].box), 0);
-  }
+  ASSERT_EQ(a.numEntries(), b.numEntries());
   for (std::size_t i = 0; i < a.numTriangles(); ++i) {
     ASSERT_EQ(a.level[i], b.level[i]);
     const detail::CellRange r = detail::cellRange(a.boxes[i], a.level[i], a.grid);
@@ -282,7 +277,14 @@ void expectSameLayout(const detail::HierarchicalHash<S>& a, const detail::Hierar
           const auto *sa = a.find(key), *sb = b.find(key);
           ASSERT_TRUE(sa && sb);
           EXPECT_EQ(sa->begin, sb->begin);
-          EXPECT_EQ(sa->count, sb->count);
+          ASSERT_EQ(sa->count, sb->count);
+          // The cell's entries, in table order.
+          const auto *ea = a.entriesOf(a.level[i]) + sa->begin, *eb = b.entriesOf(b.level[i]) + sb->begin;
+          for (std::uint32_t k = 0; k < sa->count; ++k) {
+            ASSERT_EQ(ea[k].id, eb[k].id) << k;
+            ASSERT_EQ(ea[k].lo_mask, eb[k].lo_mask) << k;
+            ASSERT_EQ(std::memcmp(&ea[k].box, &eb[k].box, sizeof ea[k].box), 0);
+          }
         }
   }
   EXPECT_EQ(a.stats().cells, b.stats().cells);
@@ -366,6 +368,64 @@ TEST(HashedMesh, RehashIsLazyAndCorrectAfterUpdates) {
   EXPECT_TRUE(cloth.cpuHashFresh());
 }
 
+// An inter-object query builds only the cell tables of the levels its lookups visit: a fine
+// cloth against a coarse sphere needs the cloth's cells from the level of the sphere's smallest
+// triangle up. A later query that needs more (a self query) adds the missing levels as a second
+// table. Every answer equals brute force, in either argument order, in every state.
+TEST(HashedMesh, InterQueriesBuildOnlyTheLevelsTheirLookupsVisit) {
+  using Hash = detail::HierarchicalHash<double>;
+  const auto sphere_mesh = makeSphere<double>({0, 0, 0}, 1.0, 16, 8);  // coarse
+  HashedMesh<double> sphere(sphere_mesh);
+  const auto full = HashedMesh<double>(makeDrapedCloth<double>(60, 4.0, 1.0, 0.05, 1.0)).stats();
+  HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.05, 0.3));
+  for (int order = 0; order < 2; ++order) {
+    const auto mt = makeDrapedCloth<double>(60, 4.0, 1.0, 0.05, 1.0);
+    cloth.updateVertices(makeDrapedCloth<double>(60, 4.0, 1.0, 0.05, 0.5).vertices);
+    cloth.updateVertices(mt.vertices);
+    const auto want_inter = bruteForceIntersectMeshes(mt, cloth.pose(), sphere_mesh, sphere.pose());
+    ASSERT_FALSE(want_inter.empty());
+    std::vector<TrianglePair> inter;
+    if (order == 0) {
+      inter = kdet_test::sorted(intersectMeshes(cloth, sphere).pairs);
+    } else {
+      for (const TrianglePair& p : intersectMeshes(sphere, cloth).pairs) inter.push_back({p.b, p.a});
+      inter = kdet_test::sorted(std::move(inter));
+    }
+    EXPECT_EQ(inter, want_inter) << "order " << order;
+    // Only the upper levels of the cloth: its smallest triangles are below the sphere's.
+    const Hash& h = cloth.hashFrom(Hash::kNoTable);  // (builds nothing more)
+    EXPECT_FALSE(cloth.cpuHashFresh());
+    EXPECT_GT(h.coveredFrom(), 0);
+    EXPECT_LE(h.coveredFrom(), h.top_level);
+    EXPECT_EQ(h.coveredFrom(), detail::levelFor(sphere.hash().d_smallest, h.grid));
+    std::size_t upper_entries = 0;
+    for (std::size_t i = 0; i < cloth.numTriangles(); ++i)
+      if (h.level[i] >= h.coveredFrom())
+        upper_entries += std::size_t(detail::cellRange(h.boxes[i], h.level[i], h.grid).count());
+    EXPECT_EQ(h.numEntries(), upper_entries);
+    EXPECT_LT(2 * h.numEntries(), full.entries) << "most of the cloth is finer than the sphere";
+    // The same answer again (fast path), then a self query adds the lower levels.
+    EXPECT_EQ(kdet_test::sorted(intersectMeshes(cloth, sphere).pairs), want_inter);
+    EXPECT_EQ(kdet_test::sorted(intersectSelf(cloth).pairs), bruteForceIntersectSelf(mt));
+    EXPECT_TRUE(cloth.cpuHashFresh());
+    EXPECT_EQ(h.coveredFrom(), 0);
+    expectEveryTriangleInItsCells(cloth);  // both tables: every cell complete, nothing else
+    EXPECT_EQ(cloth.stats().entries, full.entries);
+    EXPECT_EQ(cloth.stats().cells, full.cells);
+    EXPECT_EQ(kdet_test::sorted(intersectMeshes(cloth, sphere).pairs), want_inter);
+  }
+  // No lookup at all into a mesh whose triangles are all smaller than the other's smallest: no
+  // table is built for it (and the answer is still complete).
+  HashedMesh<double> tiny(makeSphere<double>({0, 0, 1}, 0.05, 32, 16));  // on the sphere's top
+  const auto want = bruteForceIntersectMeshes(tiny.mesh(), tiny.pose(), sphere_mesh, sphere.pose());
+  ASSERT_FALSE(want.empty());
+  EXPECT_EQ(kdet_test::sorted(intersectMeshes(tiny, sphere).pairs), want);
+  const Hash& ht = tiny.hashFrom(Hash::kNoTable);
+  ASSERT_LT(ht.d_max, sphere.hash().d_smallest);
+  EXPECT_EQ(ht.coveredFrom(), Hash::kNoTable);
+  EXPECT_EQ(ht.numEntries(), 0u);
+}
+
 TEST(HashedMesh, ConcurrentQueriesRightAfterAnUpdate) {
   // Two threads query the same stale mesh at once: one rebuilds, the other waits; both must see
   // the complete new hash. Repeated over several deformations.
@@ -415,6 +475,34 @@ enum LazyOomResult : int {
   kOther = 11,         // any other exception
 };
 
+/// Runs child(headroom) in a fresh forked child per run, under address-space limits growing in
+/// 512 KiB steps (the child sets the limit where the allocations under test begin), until a run
+/// succeeds or the headroom passes 64 MiB, so that the failure hits those allocations one after
+/// another. Every run must end cleanly (kFailedCleanly or kSucceeded) and the last one succeed.
+/// Skips when the limit never bit.
+void expectCleanFailuresUnderGrowingLimits(const char* what,
+                                           const std::function<int(std::size_t)>& child) {
+  int failures = 0, successes = 0, wrong = 0, signals = 0;
+  for (std::size_t headroom = 0; headroom <= (64u << 20) && successes == 0;
+       headroom += 512u << 10) {
+    ::malloc_trim(0);
+    const int rc = kdet_test::runInChild([&] { return child(headroom); }, kOther);
+    failures += rc == kFailedCleanly;
+    successes += rc == kSucceeded;
+    wrong += rc == kWrong || rc == kOther;
+    signals += rc < 0;
+  }
+  std::printf("%s under growing memory limits: %d clean failures, %d wrong, %d killed by a "
+              "signal, then success: %d\n",
+              what, failures, wrong, signals, successes);
+  EXPECT_EQ(wrong, 0);
+  EXPECT_EQ(signals, 0);
+  EXPECT_EQ(successes, 1);
+  // Run alone (as ctest runs every test), the limit bites. After other tests in the same process,
+  // free heap they left can serve the allocations without new address space.
+  if (failures == 0) GTEST_SKIP() << "the limit never bit (free heap left by earlier tests?)";
+}
+
 
 }  // namespace
 
@@ -435,40 +523,62 @@ TEST(HashedMesh, AFailedLazyRebuildThrowsFromTheQueryAndKeepsTheMeshUsable) {
   ASSERT_FALSE(want.empty());
   HashedMesh<double> h(small, Transform<double>::identity(), 1);
   ASSERT_FALSE(intersectSelf(h, one).pairs.empty());  // built for the small mesh
-  int failures = 0, successes = 0, wrong = 0, signals = 0;
-  for (std::size_t headroom = 0; headroom <= (64u << 20) && successes == 0;
-       headroom += 512u << 10) {
-    TriangleMesh<double> replacement = big;
-    ::malloc_trim(0);
-    const int rc = kdet_test::runInChild([&] {
-      h.setMesh(std::move(replacement));  // validates and stores: the re-hash waits for a query
-      if (h.cpuHashFresh()) return int(kWrong);
-      kdet_test::limitAddressSpace(headroom);
-      try {
-        const bool same = kdet_test::sorted(intersectSelf(h, one).pairs) == want;
-        return int(same ? kSucceeded : kWrong);
-      } catch (const std::bad_alloc&) {
-        kdet_test::unlimitAddressSpace();
-        // (The failure may also have come after the rebuild, from the query's own output.)
-        const bool same = h.numTriangles() == big.triangles.size() &&
-                          kdet_test::sorted(intersectSelf(h, one).pairs) == want &&
-                          h.cpuHashFresh();
-        return int(same ? kFailedCleanly : kWrong);
-      }
-    }, kOther);
-    failures += rc == kFailedCleanly;
-    successes += rc == kSucceeded;
-    wrong += rc == kWrong || rc == kOther;
-    signals += rc < 0;
-  }
-  std::printf("lazy rebuild under growing memory limits: %d clean failures, %d wrong, %d killed "
-              "by a signal, then success: %d\n",
-              failures, wrong, signals, successes);
-  EXPECT_EQ(wrong, 0);
-  EXPECT_EQ(signals, 0);
-  EXPECT_EQ(successes, 1);
-  // Run alone (as ctest runs every test), the limit bites. After other tests in the same process,
-  // free heap they left can serve the rebuild without new address space.
-  if (failures == 0) GTEST_SKIP() << "the limit never bit (free heap left by earlier tests?)";
+  expectCleanFailuresUnderGrowingLimits("lazy rebuild", [&](std::size_t headroom) {
+    h.setMesh(big);  // validates and stores: the re-hash waits for a query
+    if (h.cpuHashFresh()) return int(kWrong);
+    kdet_test::limitAddressSpace(headroom);
+    try {
+      const bool same = kdet_test::sorted(intersectSelf(h, one).pairs) == want;
+      return int(same ? kSucceeded : kWrong);
+    } catch (const std::bad_alloc&) {
+      kdet_test::unlimitAddressSpace();
+      // (The failure may also have come after the rebuild, from the query's own output.)
+      const bool same = h.numTriangles() == big.triangles.size() &&
+                        kdet_test::sorted(intersectSelf(h, one).pairs) == want &&
+                        h.cpuHashFresh();
+      return int(same ? kFailedCleanly : kWrong);
+    }
+  });
+}
+
+/// The same for the second table: an inter query built the upper levels of a mesh (before the
+/// limit), then a self query must add the lower ones under the limit. A failure there propagates
+/// from the self query and leaves the first table as it was: the inter query still answers from
+/// it, and the next self query (with memory) completes the hash.
+TEST(HashedMesh, AFailedTableExtensionThrowsFromTheQueryAndKeepsTheFirstTable) {
+  if (kdet_test::kSanitized) GTEST_SKIP() << "RLIMIT_AS and AddressSanitizer do not mix";
+  using Hash = detail::HierarchicalHash<double>;
+  ::mallopt(M_MMAP_THRESHOLD, 64 * 1024);
+  const TriangleMesh<double> big = makeRandomSoup<double>(40000, 6.0, 0.01, 0.3, 3);
+  QueryOptions one;
+  one.threads = 1;
+  HashedMesh<double> probe(makeSphere<double>({3, 3, 3}, 1.5, 60, 30), Transform<double>::identity(), 1);
+  HashedMesh<double> reference(big, Transform<double>::identity(), 1);
+  const auto want_self = kdet_test::sorted(intersectSelf(reference, one).pairs);
+  const auto want_inter = kdet_test::sorted(intersectMeshes(reference, probe, one).pairs);
+  ASSERT_FALSE(want_self.empty());
+  ASSERT_FALSE(want_inter.empty());
+  expectCleanFailuresUnderGrowingLimits("table extension", [&](std::size_t headroom) {
+    HashedMesh<double> h(big, Transform<double>::identity(), 1);
+    if (kdet_test::sorted(intersectMeshes(h, probe, one).pairs) != want_inter) return int(kWrong);
+    const int from = h.hashFrom(Hash::kNoTable).coveredFrom();
+    if (from <= 0 || from == Hash::kNoTable) return int(kWrong);  // not the case under test
+    kdet_test::limitAddressSpace(headroom);
+    try {
+      const bool same = kdet_test::sorted(intersectSelf(h, one).pairs) == want_self;
+      return int(same ? kSucceeded : kWrong);
+    } catch (const std::bad_alloc&) {
+      kdet_test::unlimitAddressSpace();
+      // Either the extension failed (the first table is kept) or the query's own output did
+      // (after a complete extension).
+      const int after = h.hashFrom(Hash::kNoTable).coveredFrom();
+      const bool kept = after == from || (after == 0 && h.cpuHashFresh());
+      const bool same = kept &&
+                        kdet_test::sorted(intersectMeshes(h, probe, one).pairs) == want_inter &&
+                        kdet_test::sorted(intersectSelf(h, one).pairs) == want_self &&
+                        h.cpuHashFresh();
+      return int(same ? kFailedCleanly : kWrong);
+    }
+  });
 }
 #endif

@@ -85,20 +85,26 @@ class HashedMesh {
   /// CPU query does it): for callers that want the O(n) re-hash outside their queries, e.g. to
   /// time it. Throws what hash() throws.
   void prepareCpuHash() const { (void)hash(); }
-  /// Whether the CPU hash is current (false from a geometry change until the next CPU query,
-  /// stats() or prepareCpuHash()).
+  /// Whether the CPU hash is current on every level (false from a geometry change until the
+  /// next CPU query that needs every level, stats() or prepareCpuHash(): a self query does, an
+  /// inter-object query builds only the levels its lookups visit).
   bool cpuHashFresh() const;
 
   /// The box of the mesh's vertices in its own frame (lo > hi when it has none), kept current by
   /// every geometry change without building the hash. It contains every triangle.
   const detail::Aabb<double>& localBounds() const { return bounds_; }
 
-  /// Internal: the CPU hierarchy (used by the CPU backend and the analysis). Built here on first
-  /// use after a geometry change (thread-safe, see the class comment). If that build fails
-  /// (std::bad_alloc, or InvalidInputError for a mesh too large for 32-bit entry indices) the
-  /// exception propagates to the caller (the query), and the mesh, its pose and version are
-  /// untouched and still valid: the hash stays stale and the next call tries again.
-  const detail::HierarchicalHash<S>& hash() const;
+  /// Internal: the CPU hierarchy (used by the CPU backend and the analysis) with the cell tables
+  /// of every level. Built here on first use after a geometry change (thread-safe, see the class
+  /// comment). If that build fails (std::bad_alloc, or InvalidInputError for a mesh too large for
+  /// 32-bit entry indices) the exception propagates to the caller (the query), and the mesh, its
+  /// pose and version are untouched and still valid: the hash stays stale (or keeps the levels
+  /// it had) and the next call tries again.
+  const detail::HierarchicalHash<S>& hash() const { return hashFrom(0); }
+  /// Internal: the same, with the cell tables of levels >= from_level at least (the per-triangle
+  /// data always; no table at all for HierarchicalHash::kNoTable). For queries whose lookups
+  /// start no lower than from_level (see cpu::intersectMeshes).
+  const detail::HierarchicalHash<S>& hashFrom(int from_level) const;
 
  private:
   /// After a geometry change: a new version, fresh bounds, the CPU hash marked stale.

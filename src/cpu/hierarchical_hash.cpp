@@ -52,46 +52,82 @@ void HierarchicalHash<S>::clear() {
   boxes.clear();
   diameter.clear();
   level.clear();
-  entries.clear();
-  slots_.clear();
+  upper_.clear();
+  lower_.clear();
+  split_ = 0;
+  covered_from_ = kNoTable;
   grid = GridParams{};
   bounds = Aabb<double>{};
   level_mask = 0;
   top_level = 0;
-  d_min = d_max = 0;
-  shift_ = 64;
-  cells_ = 0;
+  d_min = d_max = d_smallest = 0;
 }
 
 template <class S>
 void HierarchicalHash<S>::build(const std::vector<Vec3<S>>& vertices,
-                                const std::vector<Triangle>& triangles, int threads) {
+                                const std::vector<Triangle>& triangles, int threads,
+                                int from_level) {
   try {
-    buildImpl(vertices, triangles, threads);
+    upper_.clear();  // (keeps the buffers)
+    lower_.clear();
+    split_ = 0;
+    covered_from_ = kNoTable;
+    perTriangle(vertices, triangles, threads);
+    if (from_level < kNoTable) {
+      split_ = std::max(from_level, 0);
+      buildTable(upper_, split_, kMaxLevels - 1, threads);
+      covered_from_ = split_;
+    }
   } catch (...) {
     clear();
     throw;
   }
 }
 
-// The build, in passes over triangles, then over hash buckets (every pass parallel, every
-// parallel pass writing disjoint memory, so the result does not depend on the thread count):
-//  1. per triangle: box and enclosing diameter; per chunk: bounds, d_min, d_max;
-//  2. per triangle: level; per (chunk, bucket): how many of the chunk's (cell, triangle) records
-//     hash into the bucket. A bucket is a range of home slots: the top bits of the key's hash;
-//  3. per triangle: the records, scattered to their buckets (stable);
-//  4. per bucket, in cache: sort the records by (hash, key, decreasing diameter, increasing id):
-//     a counting sort on the next hash bits, then the tiny runs that share a digit. This groups
-//     each cell's records, largest triangle first, and orders the cells by home slot;
-//  5. placing the cells by linear probing in increasing home order writes the table
-//     sequentially: per bucket, where its cells end if none overflowed into it, then (serially,
-//     per bucket) the overflow each bucket passes on, then per bucket the slots and the entries.
-// The order of the records after pass 4 is a total order on (cell, triangle), so the entries and
-// the table are a function of the mesh alone. Every buffer is reused, and nothing is zeroed that
-// is overwritten anyway.
 template <class S>
-void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
-                                    const std::vector<Triangle>& triangles, int threads) {
+void HierarchicalHash<S>::cover(int from_level, int threads) {
+  from_level = std::max(from_level, 0);
+  if (from_level >= covered_from_) return;
+  if (covered_from_ == kNoTable) {  // no table yet: the first one, from this level up
+    try {
+      split_ = from_level;
+      buildTable(upper_, split_, kMaxLevels - 1, threads);
+    } catch (...) {
+      upper_.clear();
+      split_ = 0;
+      throw;
+    }
+    covered_from_ = split_;
+  } else {  // the levels below the first table: the second one (upper_ is not touched)
+    try {
+      buildTable(lower_, 0, split_ - 1, threads);
+    } catch (...) {
+      lower_.clear();
+      throw;
+    }
+    covered_from_ = 0;
+  }
+}
+
+namespace {
+/// Chunks of the per-triangle passes: a few per thread (scheduled dynamically).
+struct Chunking {
+  std::size_t chunks, size;
+};
+Chunking chunking(std::size_t n, int threads) {
+  const int want = cpu::resolveThreads(threads, std::numeric_limits<std::size_t>::max());
+  const std::size_t chunks =
+      std::max<std::size_t>(1, std::min((n + kMinTriangleChunk - 1) / kMinTriangleChunk,
+                                        std::size_t(4) * std::size_t(want)));
+  return {chunks, (n + chunks - 1) / chunks};
+}
+}  // namespace
+
+// The per-triangle data, in two parallel passes over chunks of triangles: box and enclosing
+// diameter (per chunk: bounds and the diameters' range), then, once the grid is known, the level.
+template <class S>
+void HierarchicalHash<S>::perTriangle(const std::vector<Vec3<S>>& vertices,
+                                      const std::vector<Triangle>& triangles, int threads) {
   const std::size_t n = triangles.size();
   // resize, not assign: every element is overwritten below, and a rebuild of a mesh of the same
   // size (a deforming mesh) then touches no allocator and zeroes nothing.
@@ -100,37 +136,27 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
   level.resize(n);
   level_mask = 0;
   top_level = 0;
-  d_min = d_max = 0;
+  d_min = d_max = d_smallest = 0;
   bounds = Aabb<double>{};
   grid = GridParams{};
-  shift_ = 64;
-  cells_ = 0;
-  if (n == 0) {
-    entries.clear();
-    slots_.clear();
-    return;
-  }
+  if (n == 0) return;
 
-  const int want = cpu::resolveThreads(threads, std::numeric_limits<std::size_t>::max());
-  // Chunks of the per-triangle passes: a few per thread (scheduled dynamically).
-  const std::size_t chunks =
-      std::max<std::size_t>(1, std::min((n + kMinTriangleChunk - 1) / kMinTriangleChunk,
-                                        std::size_t(4) * std::size_t(want)));
-  const std::size_t chunk_size = (n + chunks - 1) / chunks;
+  const Chunking ck = chunking(n, threads);
+  const std::size_t chunks = ck.chunks, chunk_size = ck.size;
   const Vec3<S>* v = vertices.data();
   const Triangle* t = triangles.data();
 
   // ---- 1. boxes, diameters, bounds ----
   struct Partial {
     Aabb<double> box;
-    double d_max, d_min_pos;
-    std::uint64_t records, level_mask;
+    double d_max, d_min_pos, d_smallest;
+    std::uint64_t level_mask;
   };
   std::vector<Partial> part(chunks);
   cpu::forEachChunk(chunks, threads, [&](std::size_t c) {
     const std::size_t b = c * chunk_size, e = std::min(n, b + chunk_size);
     const double inf = std::numeric_limits<double>::infinity();
-    Partial p{{{inf, inf, inf}, {-inf, -inf, -inf}}, 0.0, inf, 0, 0};
+    Partial p{{{inf, inf, inf}, {-inf, -inf, -inf}}, 0.0, inf, inf, 0};
     for (std::size_t i = b; i < e; ++i) {
       const Vec3<S>&p0 = v[t[i][0]], &p1 = v[t[i][1]], &p2 = v[t[i][2]];
       const Aabb<double> box = triangleBox<double>(p0, p1, p2);
@@ -142,6 +168,7 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
         p.box.hi[a] = std::max(p.box.hi[a], box.hi[a]);
       }
       p.d_max = std::max(p.d_max, d);
+      p.d_smallest = std::min(p.d_smallest, d);
       if (d > 0) p.d_min_pos = std::min(p.d_min_pos, d);
     }
     part[c] = p;
@@ -150,6 +177,7 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
   bounds = part[0].box;
   double dmin_pos = part[0].d_min_pos;
   d_max = part[0].d_max;
+  d_smallest = part[0].d_smallest;
   for (std::size_t c = 1; c < chunks; ++c) {
     for (int a = 0; a < 3; ++a) {
       bounds.lo[a] = std::min(bounds.lo[a], part[c].box.lo[a]);
@@ -157,6 +185,7 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
     }
     d_max = std::max(d_max, part[c].d_max);
     dmin_pos = std::min(dmin_pos, part[c].d_min_pos);
+    d_smallest = std::min(d_smallest, part[c].d_smallest);
   }
   d_min = std::isfinite(dmin_pos) ? dmin_pos : 0.0;
   const double extent = std::max({bounds.hi.x - bounds.lo.x, bounds.hi.y - bounds.lo.y,
@@ -174,42 +203,82 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
   top_level = levelFor(d_max, grid);
   grid.num_levels = top_level + 1;
 
-  // Hash buckets: the top `bucket_bits` bits of a key's hash. Fixed by n alone.
+  // ---- levels ----
+  cpu::forEachChunk(chunks, threads, [&](std::size_t c) {
+    const std::size_t b = c * chunk_size, e = std::min(n, b + chunk_size);
+    std::uint64_t mask = 0;
+    for (std::size_t i = b; i < e; ++i) {
+      const int l = levelFor(diameter[i], grid);
+      level[i] = std::uint8_t(l);
+      mask |= std::uint64_t(1) << l;
+    }
+    part[c].level_mask = mask;
+    return true;
+  });
+  for (std::size_t c = 0; c < chunks; ++c) level_mask |= part[c].level_mask;
+}
+
+// A cell table of the triangles on levels [lo, hi], in passes over triangles, then over hash
+// buckets (every pass parallel, every parallel pass writing disjoint memory, so the result does
+// not depend on the thread count):
+//  2. per (chunk, bucket): how many of the chunk's (cell, triangle) records hash into the bucket.
+//     A bucket is a range of home slots: the top bits of the key's hash;
+//  3. per triangle: the records, scattered to their buckets (stable);
+//  4. per bucket, in cache: sort the records by (hash, key, decreasing diameter, increasing id):
+//     a counting sort on the next hash bits, then the tiny runs that share a digit. This groups
+//     each cell's records, largest triangle first, and orders the cells by home slot;
+//  5. placing the cells by linear probing in increasing home order writes the table
+//     sequentially: per bucket, where its cells end if none overflowed into it, then (serially,
+//     per bucket) the overflow each bucket passes on, then per bucket the slots and the entries.
+// (Pass 1 is perTriangle.) The order of the records after pass 4 is a total order on (cell,
+// triangle), so the entries and the table are a function of the mesh and [lo, hi] alone. Every
+// buffer is reused, and nothing is zeroed that is overwritten anyway.
+template <class S>
+void HierarchicalHash<S>::buildTable(Table& out, int lo, int hi, int threads) {
+  const std::size_t n = level.size();
+  const int want = cpu::resolveThreads(threads, std::numeric_limits<std::size_t>::max());
+  const Chunking ck = chunking(n, threads);
+  const std::size_t chunks = ck.chunks, chunk_size = ck.size;
+
+  // Hash buckets: the top `bucket_bits` bits of a key's hash. Fixed by the triangles on the
+  // table's levels alone.
+  std::size_t n_in = 0;
+  for (std::size_t i = 0; i < n; ++i) n_in += (level[i] >= lo && level[i] <= hi) ? 1 : 0;
+  if (n_in == 0) {
+    out.clear();
+    return;
+  }
   int bucket_bits = 0;
-  while ((std::size_t(1) << bucket_bits) * kTrianglesPerBucket < n) ++bucket_bits;
+  while ((std::size_t(1) << bucket_bits) * kTrianglesPerBucket < n_in) ++bucket_bits;
   const std::size_t num_buckets = std::size_t(1) << bucket_bits;
   auto bucketOf = [bucket_bits](std::uint64_t h) -> std::size_t {
     return bucket_bits == 0 ? 0 : std::size_t(h >> (64 - bucket_bits));
   };
 
-  // ---- 2. levels, and records per (chunk, bucket) ----
+  // ---- 2. records per (chunk, bucket), of the triangles on levels [lo, hi] ----
   std::vector<std::uint32_t>& hist = scratch_hist_;  // becomes each chunk's write cursors
   hist.resize(chunks * num_buckets);
+  std::vector<std::uint64_t> records(chunks);
   cpu::forEachChunk(chunks, threads, [&](std::size_t c) {
     const std::size_t b = c * chunk_size, e = std::min(n, b + chunk_size);
     std::uint32_t* hc = hist.data() + c * num_buckets;
     std::fill(hc, hc + num_buckets, 0u);
-    std::uint64_t records = 0, mask = 0;
+    std::uint64_t count = 0;
     for (std::size_t i = b; i < e; ++i) {
-      const int l = levelFor(diameter[i], grid);
-      level[i] = std::uint8_t(l);
-      mask |= std::uint64_t(1) << l;
+      const int l = level[i];
+      if (l < lo || l > hi) continue;
       const CellRange r = cellRange(boxes[i], l, grid);
-      records += std::uint64_t(r.count());
+      count += std::uint64_t(r.count());
       for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
         for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
           for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z)
             ++hc[bucketOf(hashCellKey(makeCellKey(l, x, y, z)))];
     }
-    part[c].records = records;
-    part[c].level_mask = mask;
+    records[c] = count;
     return true;
   });
   std::uint64_t total = 0;
-  for (std::size_t c = 0; c < chunks; ++c) {
-    total += part[c].records;
-    level_mask |= part[c].level_mask;
-  }
+  for (std::size_t c = 0; c < chunks; ++c) total += records[c];
   if (total >= std::numeric_limits<std::uint32_t>::max())
     throw InvalidInputError("mesh too large for the hierarchical hash: " + std::to_string(total) +
                             " cell entries");
@@ -236,6 +305,7 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
     std::uint32_t* cursor = hist.data() + c * num_buckets;
     for (std::size_t i = b; i < e; ++i) {
       const int l = level[i];
+      if (l < lo || l > hi) continue;
       const CellRange r = cellRange(boxes[i], l, grid);
       std::uint64_t dbits = 0;  // diameters are >= 0 (and never -0: sqrt of a sum of squares)
       if (diameter[i] > 0) std::memcpy(&dbits, &diameter[i], sizeof dbits);
@@ -342,7 +412,6 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
   });
   std::uint64_t cells = 0;
   for (std::size_t k = 0; k < num_buckets; ++k) cells += bucket[k].cells;
-  cells_ = std::size_t(cells);
 
   // Open addressing, 2 to 4 slots per cell: capacity >= 1.25 * entries as long as that is
   // between 2 and 4 times the cells (load factor <= 1/2 keeps linear probes short: a query
@@ -384,11 +453,14 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
     in = end > next ? end - next : 0;
   }
   const std::uint64_t table_end = std::max(end, capacity);  // home slots + overflow tail
-  slots_.resize(table_end + 1);                             // + an empty sentinel
+  std::vector<Slot>& slots = out.slots;
+  std::vector<Entry>& entries = out.entries;
+  slots.resize(table_end + 1);  // + an empty sentinel
   entries.resize(total);
-  shift_ = unsigned(64 - capacity_bits);
+  out.shift = unsigned(64 - capacity_bits);
+  out.cells = std::size_t(cells);
   const Slot empty_slot{{0, 0}, 0, 0};
-  slots_[table_end] = empty_slot;
+  slots[table_end] = empty_slot;
   cpu::forEachChunk(groups, threads, [&](std::size_t g) {
     const std::size_t kb = g * group_size, ke = std::min(num_buckets, kb + group_size);
     for (std::size_t k = kb; k < ke; ++k) {
@@ -397,7 +469,7 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
       for (std::uint32_t j = rb; j < re;) {
         const CellKey key = rec[j].key;
         const std::uint64_t home = std::uint64_t(rec[j].h32) >> home_shift;
-        while (s < home) slots_[s++] = empty_slot;
+        while (s < home) slots[s++] = empty_slot;
         const int l = int(key.hi >> 56);
         const double scale = levelScale(l);
         std::int64_t cell[3];
@@ -412,19 +484,19 @@ void HierarchicalHash<S>::buildImpl(const std::vector<Vec3<S>>& vertices,
               std::uint8_t((cellCoordScaled(box.lo.x, 0, scale, grid) == cell[0] ? 1 : 0) |
                            (cellCoordScaled(box.lo.y, 1, scale, grid) == cell[1] ? 2 : 0) |
                            (cellCoordScaled(box.lo.z, 2, scale, grid) == cell[2] ? 4 : 0));
-          Entry& out = entries[je];
-          out.box = entryBox(box, grid.origin);
-          std::memcpy(&out.diameter, &rec[je].dbits, sizeof out.diameter);
-          out.id = i;
-          out.lo_mask = lo_mask;
+          Entry& ent = entries[je];
+          ent.box = entryBox(box, grid.origin);
+          std::memcpy(&ent.diameter, &rec[je].dbits, sizeof ent.diameter);
+          ent.id = i;
+          ent.lo_mask = lo_mask;
           ++je;
         } while (je < re && rec[je].key == key);
-        slots_[s++] = Slot{key, j, je - j};
+        slots[s++] = Slot{key, j, je - j};
         j = je;
       }
       const std::uint64_t limit =
           k + 1 < num_buckets ? (std::uint64_t(k + 1) << slots_per_bucket_bits) : table_end;
-      while (s < limit) slots_[s++] = empty_slot;
+      while (s < limit) slots[s++] = empty_slot;
     }
     return true;
   });
@@ -440,9 +512,11 @@ HierarchyStats HierarchicalHash<S>::stats() const {
   st.d_min = d_min;
   st.d_max = d_max;
   st.cell_size0 = grid.cell0;
-  st.cells = cells_;
-  st.entries = entries.size();
-  for (const Slot& s : slots_) st.max_cell_load = std::max<std::size_t>(st.max_cell_load, s.count);
+  st.cells = upper_.cells + lower_.cells;
+  st.entries = numEntries();
+  for (const Table* t : {&upper_, &lower_})
+    for (const Slot& s : t->slots)
+      st.max_cell_load = std::max<std::size_t>(st.max_cell_load, s.count);
   st.memory_bytes = memoryBytes();
   return st;
 }
@@ -450,7 +524,9 @@ HierarchyStats HierarchicalHash<S>::stats() const {
 template <class S>
 std::size_t HierarchicalHash<S>::memoryBytes() const {
   return boxes.capacity() * sizeof(Aabb<double>) + diameter.capacity() * sizeof(double) +
-         level.capacity() + entries.capacity() * sizeof(Entry) + slots_.capacity() * sizeof(Slot) +
+         level.capacity() +
+         (upper_.entries.capacity() + lower_.entries.capacity()) * sizeof(Entry) +
+         (upper_.slots.capacity() + lower_.slots.capacity()) * sizeof(Slot) +
          scratch_rec_.capacity() * sizeof(Rec) +
          (scratch_hist_.capacity() + scratch_cell_.capacity()) * sizeof(std::uint32_t) +
          scratch_bucket_.capacity() * sizeof(BucketInfo);

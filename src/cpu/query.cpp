@@ -88,10 +88,13 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
                             const QueryOptions& options) {
   const TriangleMesh<S>& ma = A.mesh();
   const TriangleMesh<S>& mb = B.mesh();
-  const HierarchicalHash<S>& ha = A.hash();
-  const HierarchicalHash<S>& hb = B.hash();
   const std::size_t na = ma.triangles.size(), nb = mb.triangles.size();
   if (na == 0 || nb == 0) return QueryResult{};
+  // The per-triangle data first (boxes, diameters, levels, bounds); the cell tables below, once
+  // it is known which levels the lookups visit, and only if the meshes' bounds meet.
+  constexpr int kNoTable = HierarchicalHash<S>::kNoTable;
+  const HierarchicalHash<S>& ga = A.hashFrom(kNoTable);
+  const HierarchicalHash<S>& gb = B.hashFrom(kNoTable);
 
   const detail::RelativePose rp = detail::relativePose(A.pose(), B.pose());
   const int threads = (na + nb >= kParallelMinimum) ? options.threads : 1;
@@ -146,17 +149,29 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
     return detail::inflate(r, grow);
   };
   const double scene_grow =
-      rp.identity ? 0.0 : 64 * unit * (maxAbs(ha.bounds) + maxAbs(hb.bounds) + tmag) +
+      rp.identity ? 0.0 : 64 * unit * (maxAbs(ga.bounds) + maxAbs(gb.bounds) + tmag) +
                               std::numeric_limits<double>::min();
-  const Aabb<double> b_in_a = rp.identity ? detail::inflate(hb.bounds, 0)
-                                          : mappedBounds(hb.bounds, rp.b_to_a, scene_grow);
-  const Aabb<double> a_in_b = rp.identity ? detail::inflate(ha.bounds, 0)
-                                          : mappedBounds(ha.bounds, rp.a_to_b, scene_grow);
+  const Aabb<double> b_in_a = rp.identity ? detail::inflate(gb.bounds, 0)
+                                          : mappedBounds(gb.bounds, rp.b_to_a, scene_grow);
+  const Aabb<double> a_in_b = rp.identity ? detail::inflate(ga.bounds, 0)
+                                          : mappedBounds(ga.bounds, rp.a_to_b, scene_grow);
 
   // Constant-time rejection of separated meshes (the common case of a rigid pair): no triangle of
   // A can meet B if A's bounds miss B's grown bounds mapped into A's frame.
-  if (!detail::boxesOverlap(ha.bounds, b_in_a) || !detail::boxesOverlap(hb.bounds, a_in_b))
+  if (!detail::boxesOverlap(ga.bounds, b_in_a) || !detail::boxesOverlap(gb.bounds, a_in_b))
     return QueryResult{};
+
+  // The levels the lookups visit. A's triangle i looks B up (when d_i <= B's d_max) from
+  // levelFor(d_i) in B's grid up, B's triangle j looks A up (when d_j < A's d_max) from
+  // levelFor(d_j) in A's grid up; levelFor is monotone, so the other mesh's smallest triangle
+  // gives the lowest level. Only those tables are built: a fine cloth against a coarse body
+  // needs the few cloth cells of the body's triangles' levels, not the cloth's whole table.
+  const int from_a =
+      gb.d_smallest < ga.d_max ? detail::levelFor(gb.d_smallest, ga.grid) : kNoTable;
+  const int from_b =
+      ga.d_smallest <= gb.d_max ? detail::levelFor(ga.d_smallest, gb.grid) : kNoTable;
+  const HierarchicalHash<S>& ha = A.hashFrom(from_a);
+  const HierarchicalHash<S>& hb = B.hashFrom(from_b);
 
   auto exact = [&](const Tri& a, std::uint32_t j) {
     return testPair(options.predicate, a.p[0], a.p[1], a.p[2], vb[tb[j][0]], vb[tb[j][1]],

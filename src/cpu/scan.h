@@ -1,6 +1,7 @@
 #pragma once
 // The inner loop of every kDet lookup on the CPU, shared by the queries and the k-free analysis.
 
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 
@@ -28,6 +29,8 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
                     double dq,
                     Accept&& accept, TestEmit&& test_and_emit, QueryStats& st,
                     double grow_abs = 0, double grow_rel = 0, bool confirm = true) {
+  // The caller asked for the tables of every level visited here (HashedMesh::hashFrom).
+  assert(detail::levelFor(dq, h.grid) >= h.coveredFrom());
   for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
     if (!h.levelOccupied(L)) continue;
     // Optionally grow the query box per level by grow_abs + grow_rel * (cell edge of level L):
@@ -47,7 +50,7 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
           const auto* slot = h.find(detail::makeCellKey(L, x, y, z));
           if (!slot) continue;
           ++st.cells_visited;
-          const auto* cell = h.entries.data() + slot->begin;
+          const auto* cell = h.entriesOf(L) + slot->begin;
           for (std::uint32_t k = 0; k < slot->count; ++k) {
             const auto& e = cell[k];
             const int verdict = accept(e.id, e.diameter);
