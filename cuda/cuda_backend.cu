@@ -226,8 +226,8 @@ __global__ void __launch_bounds__(kBuildBlock)
   if (threadIdx.x == 0 && mask != 0) atomicOr(&info->level_mask, mask);
 }
 
-/// (cell, triangle) entries. kCompact: key = compact 64-bit key (exact, bijective), value =
-/// triangle. Otherwise: key = low word of the 128-bit key, hi[] = high word, value = entry index,
+/// (cell, triangle) entries. The triangle is stored with its first-cell bits (entryValue). kCompact:
+/// key = compact 64-bit key (exact, bijective), value = triangle. Otherwise: key = low word of the 128-bit key, hi[] = high word, value = entry index,
 /// tri_of[entry] = triangle (sorted in two stable passes). Entries at or past `cap` are counted
 /// (info->entries = offsets[n]) but not written; the unwritten keys keep their padding (all
 /// ones), so they sort after every real key. Nothing is written when info->need_sync.
@@ -257,15 +257,17 @@ __global__ void __launch_bounds__(kBuildBlock)
     for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
       for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z, ++e) {
         if (e >= cap) return;
+        const std::uint32_t v =
+            entryValue(i, (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u));
         if (kCompact) {
           keys[e] = compactKey(l, x, y, z, cb);
-          vals[e] = i;
+          vals[e] = v;
         } else {
           const CellKey k = detail::makeCellKey(l, x, y, z);
           keys[e] = k.lo;
           hi[e] = k.hi;
           vals[e] = e;
-          tri_of[e] = i;
+          tri_of[e] = v;
         }
       }
 }
@@ -1156,6 +1158,7 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool u
              bool try_async) {
   const cudaStream_t s = ctx.stream;
   const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  static_assert(150000000u <= kEntryTriMask, "triangle indices must fit beside the first-cell bits");
   if (nt > 150000000u)
     throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(nt) +
                             " triangles (at most 150,000,000)");

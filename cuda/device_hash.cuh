@@ -94,6 +94,14 @@ __host__ __device__ __forceinline__ unsigned long long compactKey(int level, std
          (static_cast<unsigned long long>(y) << cb) | static_cast<unsigned long long>(z);
 }
 
+/// An entry's value: the triangle (below 2^29) and, in the top three bits, whether the entry's
+/// cell is the triangle's first cell along x, y, z (bit 0, 1, 2). With them the canonical-cell
+/// test of a lookup needs no box (as the CPU's Entry::lo_mask).
+constexpr std::uint32_t kEntryTriMask = (1u << 29) - 1;
+__host__ __device__ __forceinline__ std::uint32_t entryValue(std::uint32_t tri, std::uint32_t lo_mask) {
+  return tri | (lo_mask << 29);
+}
+
 /// Slot value of an empty open-addressing slot.
 constexpr unsigned long long kEmptySlot = ~0ull;
 
@@ -106,7 +114,9 @@ struct HashView {
   const std::uint32_t* t;     ///< 3 vertex indices per triangle
   const detail::Aabb<S>* box; ///< per triangle, local frame (exact min/max of S coordinates)
   const double* diam;         ///< per triangle: enclosing diameter
-  const std::uint32_t* entry_tri;   ///< triangle of each (cell, triangle) entry, grouped by cell
+  /// Each (cell, triangle) entry, grouped by cell: the triangle and its first-cell bits
+  /// (entryValue).
+  const std::uint32_t* entry_tri;
   const std::uint32_t* cell_begin;  ///< first entry of each cell; cell_begin[cells] = entries
   /// Full key of each cell: key_words = 1: the compact 64-bit key; 2: the 128-bit CellKey as
   /// {hi, lo}. Either way a lookup compares the whole key.
@@ -190,7 +200,6 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
   const unsigned int qkey = sizeKeyOf(dq);
   for (int L = detail::levelFor(dq, info.grid); L <= info.top_level; ++L) {
     if (!((info.level_mask >> L) & 1ull)) continue;
-    const double scale = detail::levelScale(L);
     const detail::CellRange r = detail::cellRange(clipped, L, info.grid);
     // Every lane computes the same lookups (cheap next to the entry scans; a variant in which
     // the lanes probed different cells of the range and shuffled the hits was measured slower).
@@ -204,14 +213,19 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
             const std::uint32_t k = base + lane;
             bool smaller = false;
             if (k < end) {
-              const std::uint32_t j = __ldg(h.entry_tri + k);
-              const double dj = __ldg(h.diam + j);
-              smaller = sizeKeyOf(dj) < qkey;
-              if (!smaller && accept(j, dj)) {
-                const detail::Aabb<double> eb = boxOf(h, j);
-                if (detail::boxesOverlap(clipped, eb) &&
-                    detail::isCanonicalCell(clipped, eb, scale, info.grid, x, y, z))
-                  emit(j);
+              const std::uint32_t v = __ldg(h.entry_tri + k);
+              // The canonical cell holds the overlap's minimum corner: per axis the later of the
+              // two first cells (cellCoord is monotone), so, this cell lying in both ranges, it
+              // is this cell iff on every axis it is the entry's first cell or the query's (r.lo).
+              // The test needs no load, so it comes first: an entry seen from another of the
+              // query's cells costs neither its diameter nor its box.
+              const std::uint32_t lo_mask = v >> 29;
+              if (((lo_mask & 1u) || x == r.lo[0]) && ((lo_mask & 2u) || y == r.lo[1]) &&
+                  ((lo_mask & 4u) || z == r.lo[2])) {
+                const std::uint32_t j = v & kEntryTriMask;
+                const double dj = __ldg(h.diam + j);
+                smaller = sizeKeyOf(dj) < qkey;
+                if (!smaller && accept(j, dj) && detail::boxesOverlap(clipped, boxOf(h, j))) emit(j);
               }
             }
             // Entries are sorted: once one lane saw a smaller one, all later rounds are smaller.

@@ -148,8 +148,15 @@ TEST(CellCoverage, CanonicalCellIsUniqueInTheCommonRange) {
     int canonical = 0;
     for (std::int64_t x = std::max(a.lo[0], b.lo[0]); x <= std::min(a.hi[0], b.hi[0]); ++x)
       for (std::int64_t y = std::max(a.lo[1], b.lo[1]); y <= std::min(a.hi[1], b.hi[1]); ++y)
-        for (std::int64_t z = std::max(a.lo[2], b.lo[2]); z <= std::min(a.hi[2], b.hi[2]); ++z)
-          canonical += isCanonicalCell(p, q, levelScale(L), g, x, y, z) ? 1 : 0;
+        for (std::int64_t z = std::max(a.lo[2], b.lo[2]); z <= std::min(a.hi[2], b.hi[2]); ++z) {
+          const bool c = isCanonicalCell(p, q, levelScale(L), g, x, y, z);
+          canonical += c ? 1 : 0;
+          // The form both backends' lookups use (CPU Entry::lo_mask, GPU entryValue's bits): in
+          // the common range, canonical iff on every axis the cell is the first cell of p or q.
+          const bool first_cells = (x == a.lo[0] || x == b.lo[0]) && (y == a.lo[1] || y == b.lo[1]) &&
+                                   (z == a.lo[2] || z == b.lo[2]);
+          EXPECT_EQ(first_cells, c) << x << " " << y << " " << z;
+        }
     EXPECT_EQ(canonical, 1);
   }
   EXPECT_GT(tested, 500);
