@@ -226,9 +226,10 @@ __global__ void __launch_bounds__(kBuildBlock)
   if (threadIdx.x == 0 && mask != 0) atomicOr(&info->level_mask, mask);
 }
 
-/// (cell, triangle) entries. The triangle is stored with its first-cell bits (entryValue). kCompact:
-/// key = compact 64-bit key (exact, bijective), value = triangle. Otherwise: key = low word of the 128-bit key, hi[] = high word, value = entry index,
-/// tri_of[entry] = triangle (sorted in two stable passes). Entries at or past `cap` are counted
+/// (cell, triangle) entries; a triangle is stored with its first-cell bits (entryValue). kCompact:
+/// key = compact 64-bit key (exact, bijective), value = triangle. Otherwise: key = low word of the
+/// 128-bit key, hi[] = high word, value = entry index, tri_of[entry] = triangle (sorted in two
+/// stable passes). Entries at or past `cap` are counted
 /// (info->entries = offsets[n]) but not written; the unwritten keys keep their padding (all
 /// ones), so they sort after every real key. Nothing is written when info->need_sync.
 template <class S, bool kCompact>
@@ -257,8 +258,9 @@ __global__ void __launch_bounds__(kBuildBlock)
     for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
       for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z, ++e) {
         if (e >= cap) return;
-        const std::uint32_t v =
-            entryValue(i, (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u));
+        const std::uint32_t first =
+            (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u);
+        const std::uint32_t v = entryValue(i, first);
         if (kCompact) {
           keys[e] = compactKey(l, x, y, z, cb);
           vals[e] = v;

@@ -98,7 +98,8 @@ __host__ __device__ __forceinline__ unsigned long long compactKey(int level, std
 /// cell is the triangle's first cell along x, y, z (bit 0, 1, 2). With them the canonical-cell
 /// test of a lookup needs no box (as the CPU's Entry::lo_mask).
 constexpr std::uint32_t kEntryTriMask = (1u << 29) - 1;
-__host__ __device__ __forceinline__ std::uint32_t entryValue(std::uint32_t tri, std::uint32_t lo_mask) {
+__host__ __device__ __forceinline__ std::uint32_t entryValue(std::uint32_t tri,
+                                                             std::uint32_t lo_mask) {
   return tri | (lo_mask << 29);
 }
 
@@ -225,7 +226,8 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
                 const std::uint32_t j = v & kEntryTriMask;
                 const double dj = __ldg(h.diam + j);
                 smaller = sizeKeyOf(dj) < qkey;
-                if (!smaller && accept(j, dj) && detail::boxesOverlap(clipped, boxOf(h, j))) emit(j);
+                if (!smaller && accept(j, dj) && detail::boxesOverlap(clipped, boxOf(h, j)))
+                  emit(j);
               }
             }
             // Entries are sorted: once one lane saw a smaller one, all later rounds are smaller.

@@ -279,7 +279,8 @@ void expectSameLayout(const detail::HierarchicalHash<S>& a, const detail::Hierar
           EXPECT_EQ(sa->begin, sb->begin);
           ASSERT_EQ(sa->count, sb->count);
           // The cell's entries, in table order.
-          const auto *ea = a.entriesOf(a.level[i]) + sa->begin, *eb = b.entriesOf(b.level[i]) + sb->begin;
+          const auto* ea = a.entriesOf(a.level[i]) + sa->begin;
+          const auto* eb = b.entriesOf(b.level[i]) + sb->begin;
           for (std::uint32_t k = 0; k < sa->count; ++k) {
             ASSERT_EQ(ea[k].id, eb[k].id) << k;
             ASSERT_EQ(ea[k].lo_mask, eb[k].lo_mask) << k;
@@ -388,7 +389,8 @@ TEST(HashedMesh, InterQueriesBuildOnlyTheLevelsTheirLookupsVisit) {
     if (order == 0) {
       inter = kdet_test::sorted(intersectMeshes(cloth, sphere).pairs);
     } else {
-      for (const TrianglePair& p : intersectMeshes(sphere, cloth).pairs) inter.push_back({p.b, p.a});
+      for (const TrianglePair& p : intersectMeshes(sphere, cloth).pairs)
+        inter.push_back({p.b, p.a});
       inter = kdet_test::sorted(std::move(inter));
     }
     EXPECT_EQ(inter, want_inter) << "order " << order;
@@ -552,7 +554,8 @@ TEST(HashedMesh, AFailedTableExtensionThrowsFromTheQueryAndKeepsTheFirstTable) {
   const TriangleMesh<double> big = makeRandomSoup<double>(40000, 6.0, 0.01, 0.3, 3);
   QueryOptions one;
   one.threads = 1;
-  HashedMesh<double> probe(makeSphere<double>({3, 3, 3}, 1.5, 60, 30), Transform<double>::identity(), 1);
+  HashedMesh<double> probe(makeSphere<double>({3, 3, 3}, 1.5, 60, 30),
+                           Transform<double>::identity(), 1);
   HashedMesh<double> reference(big, Transform<double>::identity(), 1);
   const auto want_self = kdet_test::sorted(intersectSelf(reference, one).pairs);
   const auto want_inter = kdet_test::sorted(intersectMeshes(reference, probe, one).pairs);

@@ -155,7 +155,7 @@ class HierarchicalHash {
   // The hierarchy.
   GridParams grid;
   Aabb<double> bounds{};   // box of all triangles
-  std::uint64_t level_mask = 0;  // bit l: level l holds triangles (whether its table is built or not)
+  std::uint64_t level_mask = 0;  // bit l: level l holds triangles (its table built or not)
   int top_level = 0;
   double d_min = 0, d_max = 0;  // smallest positive and largest diameter
   double d_smallest = 0;        // smallest diameter (0 when a triangle is a point)

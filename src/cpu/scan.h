@@ -1,7 +1,6 @@
 #pragma once
 // The inner loop of every kDet lookup on the CPU, shared by the queries and the k-free analysis.
 
-#include <cassert>
 #include <cmath>
 #include <cstdint>
 
@@ -29,8 +28,8 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
                     double dq,
                     Accept&& accept, TestEmit&& test_and_emit, QueryStats& st,
                     double grow_abs = 0, double grow_rel = 0, bool confirm = true) {
-  // The caller asked for the tables of every level visited here (HashedMesh::hashFrom).
-  assert(detail::levelFor(dq, h.grid) >= h.coveredFrom());
+  // The caller asked for the tables of every level visited here (HashedMesh::hashFrom; a level
+  // without its table would look empty).
   for (int L = detail::levelFor(dq, h.grid); L <= h.top_level; ++L) {
     if (!h.levelOccupied(L)) continue;
     // Optionally grow the query box per level by grow_abs + grow_rel * (cell edge of level L):
