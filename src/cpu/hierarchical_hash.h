@@ -134,15 +134,18 @@ class HierarchicalHash {
   /// The lowest level whose cells are in a table (levels above it are too); kNoTable if none.
   int coveredFrom() const { return covered_from_; }
 
+  /// The table holding level `level`'s cells (the level must be covered). A lookup takes it
+  /// once per level.
+  const Table& table(int level) const { return level >= split_ ? upper_ : lower_; }
   /// The slot of a cell, or nullptr when the cell is empty. The cell's level must be covered.
-  const Slot* find(const CellKey& key) const { return tableOf(levelOfKey(key)).find(key); }
+  const Slot* find(const CellKey& key) const { return table(levelOfKey(key)).find(key); }
   /// The entries a slot of a level-`level` cell points into.
-  const Entry* entriesOf(int level) const { return tableOf(level).entries.data(); }
+  const Entry* entriesOf(int level) const { return table(level).entries.data(); }
 
   std::size_t numTriangles() const { return diameter.size(); }
   bool empty() const { return diameter.empty(); }
   bool levelOccupied(int l) const { return (level_mask >> l) & 1u; }
-  /// Entries and cells in the tables built so far.
+  /// Entries in the tables built so far.
   std::size_t numEntries() const { return upper_.entries.size() + lower_.entries.size(); }
   HierarchyStats stats() const;
   /// Bytes allocated by this structure.
@@ -179,7 +182,6 @@ class HierarchicalHash {
     std::uint64_t write_begin;  // first slot this bucket writes (its start plus the overflow in)
   };
   static int levelOfKey(const CellKey& key) { return int(key.hi >> 56); }
-  const Table& tableOf(int level) const { return level >= split_ ? upper_ : lower_; }
   void perTriangle(const std::vector<Vec3<S>>& vertices, const std::vector<Triangle>& triangles,
                    int threads);
   /// The table of the triangles on levels [lo, hi].

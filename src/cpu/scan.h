@@ -39,6 +39,7 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
     const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, h.bounds);
     if (detail::isEmpty(clipped)) continue;
     const detail::CellRange r = detail::cellRange(clipped, L, h.grid);
+    const auto& table = h.table(L);
     // The entries' boxes lie inside h.bounds, so testing them against the clipped query box is
     // the same test; in the entries' compact form (rounded outward, never drops a pair).
     const detail::EntryBox qe = detail::entryBox(clipped, h.grid.origin);
@@ -46,10 +47,10 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
       for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
         for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
           ++st.lookups;
-          const auto* slot = h.find(detail::makeCellKey(L, x, y, z));
+          const auto* slot = table.find(detail::makeCellKey(L, x, y, z));
           if (!slot) continue;
           ++st.cells_visited;
-          const auto* cell = h.entriesOf(L) + slot->begin;
+          const auto* cell = table.entries.data() + slot->begin;
           for (std::uint32_t k = 0; k < slot->count; ++k) {
             const auto& e = cell[k];
             const int verdict = accept(e.id, e.diameter);
