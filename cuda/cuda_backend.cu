@@ -290,18 +290,36 @@ __global__ void gatherKeysKernel(std::uint32_t m, const unsigned long long* __re
   if (k < m) dst[k] = src[perm[k]];
 }
 
-__global__ void gatherTrisKernel(std::uint32_t m, const std::uint32_t* __restrict__ tri_of,
-                                 const std::uint32_t* __restrict__ perm,
-                                 std::uint32_t* __restrict__ dst) {
-  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-  if (k < m) dst[k] = tri_of[perm[k]];
-}
-
 /// The entries of this build that were written: min(entries, cap), or none after need_sync.
 __device__ __forceinline__ std::uint32_t writtenEntries(const BuildInfo* info, std::uint32_t cap) {
   if (info->need_sync) return 0;
   const std::uint32_t e = info->entries;
   return e < cap ? e : cap;
+}
+
+/// The resident entries in cell order (HashView::entry_tri, entry_span): the sorted entry values
+/// and the sub-cell span of each entry's triangle box in its cell (so a lookup can skip most
+/// non-overlapping entries before it loads their diameter or box). `vals` may be `entry_tri`
+/// itself (no __restrict__ on either: each thread reads and writes only its own entry). kCompact:
+/// the k-th sorted value is vals[k] and its cell the compact key[k]; otherwise the k-th value is
+/// vals[perm[k]] (the 128-bit sort moves entry indices) and its cell {hi[k], key[k]}.
+template <class S, bool kCompact>
+__global__ void __launch_bounds__(kBuildBlock)
+    entriesKernel(std::uint32_t cap, const BuildInfo* info,
+                  const unsigned long long* __restrict__ key,
+                  const unsigned long long* __restrict__ hi, const std::uint32_t* vals,
+                  const std::uint32_t* __restrict__ perm, const Aabb<S>* __restrict__ box,
+                  std::uint32_t* entry_tri, std::uint32_t* __restrict__ entry_span) {
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k >= writtenEntries(info, cap)) return;
+  const std::uint32_t v = kCompact ? vals[k] : vals[perm[k]];
+  const detail::CellId c = kCompact ? compactKeyCell(key[k], info->coord_bits)
+                                    : detail::cellOfKey(CellKey{hi[k], key[k]});
+  const Aabb<S> b = box[v & kEntryTriMask];
+  const Aabb<double> bd{{double(b.lo.x), double(b.lo.y), double(b.lo.z)},
+                        {double(b.hi.x), double(b.hi.y), double(b.hi.z)}};
+  entry_tri[k] = v;
+  entry_span[k] = detail::subcellSpan(bd, c.level, c.x, c.y, c.z, info->grid);
 }
 
 /// head[k] = 1 where a new cell starts in the sorted entries (full-key comparison), 0 past the
@@ -353,13 +371,9 @@ __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restr
   if (c >= cell_cap) return;
   CellKey ck;
   if (kCompact) {
-    const int cb = info->coord_bits;
     const unsigned long long u = key[k];
-    const unsigned long long cm = (1ull << cb) - 1;
-    ck = detail::makeCellKey(static_cast<int>(u >> (3 * cb)),
-                             static_cast<std::int64_t>((u >> (2 * cb)) & cm),
-                             static_cast<std::int64_t>((u >> cb) & cm),
-                             static_cast<std::int64_t>(u & cm));
+    const detail::CellId id = compactKeyCell(u, info->coord_bits);
+    ck = detail::makeCellKey(id.level, id.x, id.y, id.z);
     cell_key[c] = u;
   } else {
     ck = CellKey{hi[k], key[k]};
@@ -424,7 +438,7 @@ __global__ void mapVerticesKernel(std::uint32_t n, const Vec3<S>* __restrict__ v
 /// mapped box). Threads [na, na + nb): B's triangle j against A's triangles with d_i > d_j (looked
 /// up in A's frame with B's box mapped back and grown by eps). The exact tests run in phase 2,
 /// one thread per candidate, so a warp does not serialise them behind its busiest thread.
-template <class S, int G, int MB>
+template <class S, int G, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     interCandidatesKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
                           std::uint32_t na, std::uint32_t nb, bool identity,
@@ -440,7 +454,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     if (di > cInfo(1).d_max) return;  // nothing in B is as large
     const Aabb<double> q =
         detail::triangleBox<double>(va[A.t[3 * i]], va[A.t[3 * i + 1]], va[A.t[3 * i + 2]]);
-    scanCandidatesGroup(
+    scanCandidatesGroup<kSpans>(
         B, cInfo(1), q, di, tile, [&](std::uint32_t, double dj) { return dj >= di; },
         [&](std::uint32_t j) { emitPair(cand, i, j); });
   } else if (idx < na + nb) {
@@ -465,14 +479,14 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       const double eps = eps_coef * mag + 2.2250738585072014e-308;
       q = detail::inflate(detail::triangleBox<double>(p[0], p[1], p[2]), eps);
     }
-    scanCandidatesGroup(
+    scanCandidatesGroup<kSpans>(
         A, cInfo(0), q, dj, tile, [&](std::uint32_t, double di) { return di > dj; },
         [&](std::uint32_t i) { emitPair(cand, i, j); });
   }
 }
 
 /// Phase 1 of a self query: triangle i against the triangles j with (d_j, j) > (d_i, i).
-template <class S, int G, int MB>
+template <class S, int G, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesKernel(HashView<S> M, std::uint32_t n, PairSink cand) {
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
@@ -480,7 +494,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G);
   if (i >= n) return;
   const double di = M.diam[i];
-  scanCandidatesGroup(
+  scanCandidatesGroup<kSpans>(
       M, cInfo(0), boxOf(M, i), di, tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
@@ -661,20 +675,23 @@ struct CachedMesh {
   DeviceBuffer<Aabb<S>> box;
   DeviceBuffer<double> diam;
   DeviceBuffer<std::uint8_t> level;
-  DeviceBuffer<std::uint32_t> entry_tri, cell_begin;
+  DeviceBuffer<std::uint32_t> entry_tri, entry_span, cell_begin;
   DeviceBuffer<unsigned long long> cell_key;  // key_words per cell
   DeviceBuffer<unsigned long long> slots;
   DeviceBuffer<BuildInfo> dinfo;  // this mesh's grid and sizes, on the device
   PinnedBuffer staging;  // vertex/triangle uploads (per mesh: two uploads can be in flight)
   std::uint32_t slot_count = 0;
   int key_words = 0;          // 1: compact 64-bit cell keys, 2: 128-bit
-  std::uint32_t entry_cap = 0, cell_cap = 0;  // what entry_tri / the cell arrays can hold
+  std::uint32_t entry_cap = 0, cell_cap = 0;  // what the entry / cell arrays can hold
   int sort_bits = 0;          // compact keys: the bits the entry sort covers
   bool pending = false;       // re-hashed without read-back: check the sizes at the query's
   std::uint32_t pending_entry_cap = 0, pending_cell_cap = 0;  // what that re-hash could store
   BuildInfo info{};           // the host's copy (after a read-back; stale while pending)
   cudaGraphExec_t graph = nullptr;  // the re-hash without read-back (rehashFromGraph)
   std::vector<std::uintptr_t> graph_key;  // the sizes and buffers it was captured with
+  // Candidates per query triangle of the last self query of this mesh and of the last inter
+  // query it took part in (spansFor()).
+  double self_density = 0, inter_density = 0;
 
   CachedMesh() = default;
   CachedMesh(const CachedMesh&) = delete;
@@ -693,6 +710,7 @@ struct CachedMesh {
     h.box = box.data();
     h.diam = diam.data();
     h.entry_tri = entry_tri.data();
+    h.entry_span = entry_span.data();
     h.cell_begin = cell_begin.data();
     h.cell_key = cell_key.data();
     h.slots = slots.data();
@@ -702,8 +720,8 @@ struct CachedMesh {
   }
   std::size_t bytes() const {
     return v.bytes() + t.bytes() + box.bytes() + diam.bytes() + level.bytes() +
-           entry_tri.bytes() + cell_begin.bytes() + cell_key.bytes() + slots.bytes() +
-           dinfo.bytes();
+           entry_tri.bytes() + entry_span.bytes() + cell_begin.bytes() + cell_key.bytes() +
+           slots.bytes() + dinfo.bytes();
   }
 };
 
@@ -914,6 +932,7 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
                               " cell entries");
     compact = m.info.fits64 != 0 && !envFlag("KDET_FCL_CUDA_FULL_KEYS");
     m.entry_tri.reserve(total);  // 1/8 slack: room for the next re-hash without read-back
+    m.entry_span.reserve(m.entry_tri.capacity(), false);
     m.entry_cap = static_cast<std::uint32_t>(std::min<std::size_t>(m.entry_tri.capacity(), 0xF0000000ull));
     m.key_words = compact ? 1 : 2;
     // The compact sort covers whole 8-bit digits (CUB's radix passes): the bits up to the next
@@ -949,18 +968,20 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
         n, m.box.data(), m.level.data(), offsets, by_size, dinfo, keys_a, nullptr, vals_a,
         nullptr, cap, dinfo);
     checkLaunch();
-    std::uint32_t* entry_tri = m.entry_tri.data();
+    // The resident entry array is the sort's second value buffer; entriesKernel rewrites each
+    // sorted value in place (thread k reads and writes only entry k).
     cub::DoubleBuffer<unsigned long long> kb(keys_a, keys_b);
-    cub::DoubleBuffer<std::uint32_t> vb(vals_a, entry_tri);
+    cub::DoubleBuffer<std::uint32_t> vb(vals_a, m.entry_tri.data());
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
       return cub::DeviceRadixSort::SortPairs(tmp, bytes, kb, vb, static_cast<int>(cap), 0,
                                              m.sort_bits, s);
     });
     keys_sorted = kb.Current();
     spare = kb.Alternate();
-    if (vb.Current() != entry_tri)
-      CUDA_TRY(cudaMemcpyAsync(entry_tri, vb.Current(), cap * sizeof(std::uint32_t),
-                               cudaMemcpyDeviceToDevice, s));
+    entriesKernel<S, true><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, nullptr,
+                                                      vb.Current(), nullptr, m.box.data(),
+                                                      m.entry_tri.data(), m.entry_span.data());
+    checkLaunch();
   } else {
     // Full 128-bit keys (never re-hashed without read-back, so cap >= entries): two stable
     // passes (low word, then high word) sort by (hi, lo).
@@ -987,9 +1008,11 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     });
     gatherKeysKernel<<<mb, kBuildBlock, 0, s>>>(mt, keys_a, vals_a, keys_b);
     checkLaunch();
-    gatherTrisKernel<<<mb, kBuildBlock, 0, s>>>(mt, tri_of, vals_a, m.entry_tri.data());
-    checkLaunch();
     hi_sorted = hi_a;
+    entriesKernel<S, false><<<mb, kBuildBlock, 0, s>>>(mt, dinfo, keys_b, hi_sorted, tri_of,
+                                                       vals_a, m.box.data(), m.entry_tri.data(),
+                                                       m.entry_span.data());
+    checkLaunch();
   }
   std::uint32_t* head = reinterpret_cast<std::uint32_t*>(spare);
   std::uint32_t* cell_index = head + cap;
@@ -1106,6 +1129,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
       reinterpret_cast<std::uintptr_t>(m.diam.data()),
       reinterpret_cast<std::uintptr_t>(m.level.data()),
       reinterpret_cast<std::uintptr_t>(m.entry_tri.data()),
+      reinterpret_cast<std::uintptr_t>(m.entry_span.data()),
       reinterpret_cast<std::uintptr_t>(m.cell_begin.data()),
       reinterpret_cast<std::uintptr_t>(m.cell_key.data()),
       reinterpret_cast<std::uintptr_t>(m.slots.data()),
@@ -1388,6 +1412,22 @@ int tileSize() {
   return t;
 }
 
+/// Whether the candidate search tests sub-cell spans (scanCandidatesGroup's kSpans), given the
+/// candidates per query triangle of the last query of the same kind on the same meshes:
+/// KDET_FCL_CUDA_SPANS = 0 (never), 1 (always), unset (when that density exceeds 4; read at every
+/// query, so tests and benchmarks can compare the ways).
+/// The span test pays where cells are crowded with near-misses, as in crumpled cloth and nearly
+/// coincident surfaces (cloth ball 8.4 candidates per triangle, two frames 21: phase 1 -3 and
+/// -11 % against the kernel without it), and costs more than it saves on sparse scenes (n-body
+/// 1.1, smooth cloth 1.6-3.4: +10 to +25 %), where the density rule leaves it off
+/// (benchmarks/RESULTS-gpu.md). The choice changes the work, never the pairs.
+bool spansFor(double density) {
+  const char* e = std::getenv("KDET_FCL_CUDA_SPANS");
+  if (e && *e == '0') return false;
+  if (e && *e == '1') return true;
+  return density > 4.0;
+}
+
 /// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
 /// KDET_FCL_CUDA_MINBLOCKS = 1 (no cap, ~100 registers), 8 (default: at most 64 registers) or 12
 /// (at most 40). The 40-register kernel has twice the occupancy of the 64-register one but spills
@@ -1538,6 +1578,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const auto una = static_cast<std::uint32_t>(na), unb = static_cast<std::uint32_t>(nb);
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
+  const bool spans = spansFor(std::max(A.inter_density, B.inter_density));
+  ctx.profile.spans = spans;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
@@ -1545,7 +1587,9 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     withTile([&](auto g, auto mb) {
       constexpr int G = decltype(g)::value;
       constexpr int MB = decltype(mb)::value;
-      interCandidatesKernel<S, G, MB><<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
+      const auto kernel = spans ? interCandidatesKernel<S, G, MB, true>
+                                : interCandidatesKernel<S, G, MB, false>;
+      kernel<<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
           av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, cand);
     });
     checkLaunch();
@@ -1564,7 +1608,9 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     return filter;
   };
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B}, {&a.mesh(), &b.mesh()}};
-  return runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb, options);
+  QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb, options);
+  A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
+  return res;
 }
 
 template <class S>
@@ -1579,14 +1625,17 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   const auto un = static_cast<std::uint32_t>(n);
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
+  const bool spans = spansFor(M.self_density);
+  ctx.profile.spans = spans;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
     const HashView<S> mv = M.view();
     bindInfo<S>(s, M, nullptr);
     withTile([&](auto g, auto mb) {
       constexpr int G = decltype(g)::value;
       constexpr int MB = decltype(mb)::value;
-      selfCandidatesKernel<S, G, MB><<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un,
-                                                                                      cand);
+      const auto kernel =
+          spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
+      kernel<<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, cand);
     });
     checkLaunch();
     ctx.record(4);
@@ -1604,7 +1653,9 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
     return filter;
   };
   PendingBuilds<S> pending{ctx, {&M, nullptr}, {&mesh.mesh(), nullptr}};
-  return runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, options);
+  QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, options);
+  M.self_density = double(ctx.profile.candidates) / double(n);
+  return res;
 }
 
 /// Serialises, initialises, and on a CUDA error drops every device buffer before rethrowing.
@@ -1680,7 +1731,7 @@ std::string deviceMemoryReport() {
       mesh[2] += m.box.bytes();
       mesh[3] += m.diam.bytes();
       mesh[4] += m.level.bytes();
-      mesh[5] += m.entry_tri.bytes();
+      mesh[5] += m.entry_tri.bytes() + m.entry_span.bytes();
       mesh[6] += m.cell_begin.bytes();
       mesh[7] += m.cell_key.bytes();
       mesh[8] += m.slots.bytes();
@@ -1689,7 +1740,7 @@ std::string deviceMemoryReport() {
   };
   meshes(ctx.meshes_f);
   meshes(ctx.meshes_d);
-  const char* mesh_names[10] = {"v", "t", "box", "diam", "level", "entry_tri", "cell_begin",
+  const char* mesh_names[10] = {"v", "t", "box", "diam", "level", "entries", "cell_begin",
                                 "cell_key", "slots", "info"};
   for (int k = 0; k < 10; ++k) add(mesh_names[k], mesh[k]);
   add("cub_temp", ctx.cub_temp.bytes());

@@ -78,6 +78,7 @@ struct QueryProfile {
                                 ///< 128-bit keys, KDET_FCL_CUDA_SYNC_REHASH=1, or a fallback)
   int rehash_fallbacks = 0;     ///< re-hashes that did not fit and were rebuilt (query rerun)
   int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
+  bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
 };
 void setProfiling(bool on);
 QueryProfile lastQueryProfile();

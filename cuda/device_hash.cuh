@@ -103,6 +103,13 @@ __host__ __device__ __forceinline__ std::uint32_t entryValue(std::uint32_t tri,
   return tri | (lo_mask << 29);
 }
 
+/// The cell of a compact key (see compactKey).
+__host__ __device__ __forceinline__ detail::CellId compactKeyCell(unsigned long long u, int cb) {
+  const unsigned long long m = (1ull << cb) - 1;
+  return {static_cast<int>(u >> (3 * cb)), static_cast<std::int64_t>((u >> (2 * cb)) & m),
+          static_cast<std::int64_t>((u >> cb) & m), static_cast<std::int64_t>(u & m)};
+}
+
 /// Slot value of an empty open-addressing slot.
 constexpr unsigned long long kEmptySlot = ~0ull;
 
@@ -118,6 +125,8 @@ struct HashView {
   /// Each (cell, triangle) entry, grouped by cell: the triangle and its first-cell bits
   /// (entryValue).
   const std::uint32_t* entry_tri;
+  /// Per entry: the sub-cell span of the triangle's box in the entry's cell (detail::subcellSpan).
+  const std::uint32_t* entry_span;
   const std::uint32_t* cell_begin;  ///< first entry of each cell; cell_begin[cells] = entries
   /// Full key of each cell: key_words = 1: the compact 64-bit key; 2: the 128-bit CellKey as
   /// {hi, lo}. Either way a lookup compares the whole key.
@@ -176,14 +185,18 @@ __device__ __forceinline__ detail::Aabb<double> boxOf(const HashView<S>& h, std:
 }
 
 /// The device twin of cpu::scanCandidates (src/cpu/scan.h), run by a tile of G lanes (a
-/// cooperative-groups tile: 4, 8, 16 or 32) for one query triangle: every triangle j of `h` on the query's level or a coarser one, in a cell the
-/// (clipped) query box covers, accepted by the size rule accept(j, d_j), whose box overlaps the
-/// query box, seen only from the canonical cell of that overlap; calls emit(j) for each. The
-/// lanes stride through each cell's entries, so a heavily loaded cell costs a few rounds of one
-/// tile instead of hundreds of iterations of one thread that its warp would wait for; the cell
-/// lookups are repeated in every lane, so smaller tiles suit lightly loaded cells. All arguments
-/// must be tile-uniform; every lane of the tile must call.
-template <class S, class Tile, class Accept, class Emit>
+/// cooperative-groups tile: 4, 8, 16 or 32) for one query triangle: every triangle j of `h` on
+/// the query's level or a coarser one, in a cell the (clipped) query box covers, accepted by the
+/// size rule accept(j, d_j), whose box overlaps the query box, seen only from the canonical cell
+/// of that overlap; calls emit(j) for each. The lanes stride through each cell's entries, so a
+/// heavily loaded cell costs a few rounds of one tile instead of hundreds of iterations of one
+/// thread that its warp would wait for; the cell lookups are repeated in every lane, so smaller
+/// tiles suit lightly loaded cells. kSpans: entries whose sub-cell span misses the query's are
+/// skipped before their diameter and box are loaded (a saving where cells are crowded with
+/// near-misses; elsewhere the filter's setup costs more than it saves, so the host chooses:
+/// spansFor() in cuda_backend.cu). All arguments must be tile-uniform; every lane of the tile
+/// must call.
+template <bool kSpans, class S, class Tile, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const BuildInfo& info,
                                                     const detail::Aabb<double>& qbox, double dq,
                                                     const Tile& tile, Accept&& accept,
@@ -202,27 +215,38 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
   for (int L = detail::levelFor(dq, info.grid); L <= info.top_level; ++L) {
     if (!((info.level_mask >> L) & 1ull)) continue;
     const detail::CellRange r = detail::cellRange(clipped, L, info.grid);
+    const std::uint32_t corners =
+        kSpans ? detail::subcellSpanCorners(clipped, L, r, info.grid) : detail::kWholeCellSpan;
+    // The loops run over offsets from the range's first cell (a range spans a few cells): fewer
+    // registers than full coordinates, and the register cap is what limits this kernel.
+    const int n[3] = {static_cast<int>(r.hi[0] - r.lo[0]), static_cast<int>(r.hi[1] - r.lo[1]),
+                      static_cast<int>(r.hi[2] - r.lo[2])};
     // Every lane computes the same lookups (cheap next to the entry scans; a variant in which
     // the lanes probed different cells of the range and shuffled the hits was measured slower).
-    for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
-      for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
-        for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
-          const int c = findCell(h, info, L, x, y, z);  // same in every lane
-          if (c < 0) continue;
+    for (int dx = 0; dx <= n[0]; ++dx)
+      for (int dy = 0; dy <= n[1]; ++dy)
+        for (int dz = 0; dz <= n[2]; ++dz) {
+          const int c = findCell(h, info, L, r.lo[0] + dx, r.lo[1] + dy, r.lo[2] + dz);
+          if (c < 0) continue;  // (the same in every lane)
           const std::uint32_t begin = __ldg(h.cell_begin + c), end = __ldg(h.cell_begin + c + 1);
+          // Per axis, whether this cell is the query's first (bits 0..2) and last (bits 3..5).
+          const unsigned int ends = (dx == 0 ? 1u : 0u) | (dy == 0 ? 2u : 0u) |
+                                    (dz == 0 ? 4u : 0u) | (dx == n[0] ? 8u : 0u) |
+                                    (dy == n[1] ? 16u : 0u) | (dz == n[2] ? 32u : 0u);
+          const std::uint32_t qspan =
+              kSpans ? detail::subcellSpanInCell(corners, ends) : detail::kWholeCellSpan;
           for (std::uint32_t base = begin; base < end; base += G) {
             const std::uint32_t k = base + lane;
             bool smaller = false;
             if (k < end) {
               const std::uint32_t v = __ldg(h.entry_tri + k);
+              const std::uint32_t espan = kSpans ? __ldg(h.entry_span + k) : 0u;
               // The canonical cell holds the overlap's minimum corner: per axis the later of the
               // two first cells (cellCoord is monotone), so, this cell lying in both ranges, it
-              // is this cell iff on every axis it is the entry's first cell or the query's (r.lo).
-              // The test needs no load, so it comes first: an entry seen from another of the
-              // query's cells costs neither its diameter nor its box.
-              const std::uint32_t lo_mask = v >> 29;
-              if (((lo_mask & 1u) || x == r.lo[0]) && ((lo_mask & 2u) || y == r.lo[1]) &&
-                  ((lo_mask & 4u) || z == r.lo[2])) {
+              // is this cell iff on every axis it is the entry's first cell or the query's. The
+              // test needs no load, so it comes first: an entry seen from another of the query's
+              // cells costs neither its diameter nor its box.
+              if (((v >> 29) | ends | 0x38u) == 0x3Fu && detail::subcellSpansOverlap(espan, qspan)) {
                 const std::uint32_t j = v & kEntryTriMask;
                 const double dj = __ldg(h.diam + j);
                 smaller = sizeKeyOf(dj) < qkey;

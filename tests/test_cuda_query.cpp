@@ -379,6 +379,73 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   unsetenv("KDET_FCL_CUDA_PLANE_FILTER");
 }
 
+TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
+  // The candidate search tests sub-cell spans never (KDET_FCL_CUDA_SPANS=0), always (=1) or,
+  // unset, when the last query of the same kind on the same meshes found more than 4 candidates
+  // per query triangle: a choice of work, never of pairs. Six shifted copies of a grid in one
+  // plane crowd their cells (dense, ~20 candidates per triangle: the rule turns the spans on);
+  // a sphere is sparse (off).
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  TriangleMesh<float> layers;
+  const int n = 20;
+  const float h = 1.0f / n;
+  for (int l = 0; l < 6; ++l)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const float x = 0.3f * h * l + i * h, y = 0.2f * h * l + j * h, z = 0;
+        layers.addTriangle({x, y, z}, {x + h, y, z}, {x, y + h, z});
+        layers.addTriangle({x + h, y, z}, {x + h, y + h, z}, {x, y + h, z});
+      }
+  HashedMesh<float> dense(layers);
+  HashedMesh<float> sphere(makeSphere<float>({0.5f, 0.5f, 0.f}, 0.3f, 48, 24));
+  const auto cpu_dense = sorted(intersectSelf(dense).pairs);
+  const auto cpu_sphere = sorted(intersectSelf(sphere).pairs);
+  const auto cpu_inter = sorted(intersectMeshes(dense, sphere).pairs);
+  ASSERT_GT(cpu_dense.size(), 1000u);
+  ASSERT_GT(cpu_inter.size(), 100u);
+  // The ctest run test_cuda_query_all_spans sets the variable for the whole binary: restored.
+  const char* outer = std::getenv("KDET_FCL_CUDA_SPANS");
+  const std::optional<std::string> saved =
+      outer ? std::optional<std::string>(outer) : std::nullopt;
+  cuda::setProfiling(true);
+  // Candidates per query triangle of the last query of each kind (-1: none yet in this test;
+  // the first query of each kind comes in mode "1", which does not look at it).
+  double d_dense = -1, d_sphere = -1, d_inter = -1;
+  int auto_on = 0, auto_off = 0;
+  for (const char* mode : {"1", "0", "", "", "1"}) {
+    ASSERT_EQ(setenv("KDET_FCL_CUDA_SPANS", mode, 1), 0);
+    if (!*mode) unsetenv("KDET_FCL_CUDA_SPANS");
+    const std::string what = std::string("mode '") + mode + "'";
+    // Checks the last query's choice; returns its candidate count.
+    auto expectChoice = [&](double previous, const std::string& query) {
+      const cuda::QueryProfile p = cuda::lastQueryProfile();
+      if (*mode == '0') EXPECT_FALSE(p.spans) << what << " " << query;
+      if (*mode == '1') EXPECT_TRUE(p.spans) << what << " " << query;
+      if (!*mode) {
+        EXPECT_EQ(p.spans, previous > 4.0) << what << " " << query << ": density " << previous;
+        (p.spans ? auto_on : auto_off) += 1;
+      }
+      return double(p.candidates);
+    };
+    EXPECT_EQ(intersectSelf(dense, on(Backend::Cuda)).pairs, cpu_dense) << what;
+    d_dense = expectChoice(d_dense, "dense self") / double(dense.numTriangles());
+    EXPECT_EQ(intersectSelf(sphere, on(Backend::Cuda)).pairs, cpu_sphere) << what;
+    d_sphere = expectChoice(d_sphere, "sphere self") / double(sphere.numTriangles());
+    EXPECT_EQ(intersectMeshes(dense, sphere, on(Backend::Cuda)).pairs, cpu_inter) << what;
+    d_inter = expectChoice(d_inter, "inter") /
+              double(dense.numTriangles() + sphere.numTriangles());
+  }
+  if (saved) setenv("KDET_FCL_CUDA_SPANS", saved->c_str(), 1);
+  else unsetenv("KDET_FCL_CUDA_SPANS");
+  cuda::setProfiling(false);
+  EXPECT_GT(d_dense, 4.0);  // the dense scene is dense
+  EXPECT_LT(d_sphere, 4.0);
+  EXPECT_GE(auto_on, 2);    // both ways of the rule ran
+  EXPECT_GE(auto_off, 2);
+#endif
+}
+
 TEST(CudaQuery, PlaneFilterCountsAndBytesPerTriangle) {
   // Not a timing: reports how many candidates reach the exact test and the device memory per
   // triangle on the UNC cloth ball (or a draped cloth without the data), and checks the counts'

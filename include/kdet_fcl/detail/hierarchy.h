@@ -85,6 +85,20 @@ KDET_HD_INLINE CellKey makeCellKey(int level, std::int64_t cx, std::int64_t cy, 
   return {(std::uint64_t(level) << 56) | (x << 16) | (y >> 24), ((y & 0xFFFFFFull) << 40) | z};
 }
 
+/// A cell: its level and coordinates.
+struct CellId {
+  int level;
+  std::int64_t x, y, z;
+};
+
+/// The cell a key names (the inverse of makeCellKey for coordinates below 2^kCellBits).
+KDET_HD_INLINE CellId cellOfKey(const CellKey& k) {
+  constexpr std::uint64_t m = (std::uint64_t(1) << kCellBits) - 1;
+  return {static_cast<int>(k.hi >> 56), static_cast<std::int64_t>((k.hi >> 16) & m),
+          static_cast<std::int64_t>(((k.hi & 0xFFFFull) << 24) | (k.lo >> 40)),
+          static_cast<std::int64_t>(k.lo & m)};
+}
+
 /// 64-bit hash of a key (a splitmix-style finalizer over both words).
 KDET_HD_INLINE std::uint64_t hashCellKey(const CellKey& k) {
   std::uint64_t h = k.hi * 0x9E3779B97F4A7C15ull ^ (k.lo + 0x632BE59BD9B4E019ull + (k.hi << 6));
@@ -125,6 +139,81 @@ KDET_HD_INLINE bool isCanonicalCell(const Aabb<double>& p, const Aabb<double>& q
   const double z = p.lo.z > q.lo.z ? p.lo.z : q.lo.z;
   return cellCoordScaled(x, 0, scale, g) == cx && cellCoordScaled(y, 1, scale, g) == cy &&
          cellCoordScaled(z, 2, scale, g) == cz;
+}
+
+/// Sub-cell spans: a cheap, conservative box test inside one cell. The cell is cut into
+/// 2^kSubcellBits slabs per axis, and a box is reduced to the first and last slab it touches per
+/// axis, clamped to the cell: six 4-bit numbers, packed as (lo_x, lo_y, lo_z) in bits 0..14 and
+/// (hi_x, hi_y, hi_z) in bits 15..29, five bits per number (the fifth is the guard bit of
+/// subcellSpansOverlap). A slab index is cellCoordScaled on a 2^kSubcellBits times finer grid
+/// minus the cell's first slab, clamped to [0, 15]: a monotone function of the coordinate (for
+/// any rounding), so two boxes that overlap (closed intervals: lo <= hi' on every axis) always
+/// have overlapping spans in any cell. The converse fails (a span is up to 1/16 of a cell too
+/// wide per side), so a passing span test is followed by the exact box test.
+constexpr int kSubcellBits = 4;
+
+/// The span of box b in cell (cx, cy, cz) of `level`.
+KDET_HD_INLINE std::uint32_t subcellSpan(const Aabb<double>& b, int level, std::int64_t cx,
+                                         std::int64_t cy, std::int64_t cz, const GridParams& g) {
+  const double scale = pow2(kSubcellBits - level);
+  const std::int64_t c[3] = {cx, cy, cz};
+  constexpr std::int64_t kLast = (std::int64_t(1) << kSubcellBits) - 1;
+  std::uint32_t span = 0;
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t first = c[a] * (kLast + 1);
+    std::int64_t lo = cellCoordScaled(b.lo[a], a, scale, g) - first;
+    std::int64_t hi = cellCoordScaled(b.hi[a], a, scale, g) - first;
+    lo = lo < 0 ? 0 : (lo > kLast ? kLast : lo);
+    hi = hi < 0 ? 0 : (hi > kLast ? kLast : hi);
+    span |= (static_cast<std::uint32_t>(lo) << (5 * a)) |
+            (static_cast<std::uint32_t>(hi) << (15 + 5 * a));
+  }
+  return span;
+}
+
+/// The query side's span for every cell of its range r on `level` at once: the lo fields as in
+/// r's first cell, the hi fields as in r's last cell (subcellSpanInCell makes a cell's span).
+KDET_HD_INLINE std::uint32_t subcellSpanCorners(const Aabb<double>& b, int level,
+                                                const CellRange& r, const GridParams& g) {
+  const double scale = pow2(kSubcellBits - level);
+  constexpr std::int64_t kLast = (std::int64_t(1) << kSubcellBits) - 1;
+  std::uint32_t span = 0;
+  for (int a = 0; a < 3; ++a) {
+    std::int64_t lo = cellCoordScaled(b.lo[a], a, scale, g) - r.lo[a] * (kLast + 1);
+    std::int64_t hi = cellCoordScaled(b.hi[a], a, scale, g) - r.hi[a] * (kLast + 1);
+    lo = lo < 0 ? 0 : (lo > kLast ? kLast : lo);
+    hi = hi < 0 ? 0 : (hi > kLast ? kLast : hi);
+    span |= (static_cast<std::uint32_t>(lo) << (5 * a)) |
+            (static_cast<std::uint32_t>(hi) << (15 + 5 * a));
+  }
+  return span;
+}
+
+/// The span of a whole cell (lo 0 and hi 15 on every axis).
+constexpr std::uint32_t kWholeCellSpan = (15u << 15) | (15u << 20) | (15u << 25);
+
+/// The query's span in one cell of its range, from subcellSpanCorners and `ends`: bit a (0..2)
+/// set when the cell is the range's first on axis a, bit 3 + a when it is the last. On an axis
+/// where the cell is not the first, lo = 0; where it is not the last, hi = 15. That is
+/// subcellSpan's value or a wider span (on such an axis subcellSpan's lo is 0 and hi 15 unless
+/// the coarse and fine coordinates round inconsistently, where the wider span is still
+/// conservative).
+KDET_HD_INLINE std::uint32_t subcellSpanInCell(std::uint32_t corners, unsigned int ends) {
+  std::uint32_t span = corners;
+  for (int a = 0; a < 3; ++a) {
+    if (!((ends >> a) & 1u)) span &= ~(15u << (5 * a));
+    if (!((ends >> (3 + a)) & 1u)) span |= 15u << (15 + 5 * a);
+  }
+  return span;
+}
+
+/// Whether two spans of the same cell overlap on every axis (hi_p >= lo_q and hi_q >= lo_p per
+/// axis), in a few integer operations: with the guard bit set above each 4-bit field, the
+/// subtraction of a field leaves the guard set iff no borrow, and never borrows across fields.
+KDET_HD_INLINE bool subcellSpansOverlap(std::uint32_t p, std::uint32_t q) {
+  constexpr std::uint32_t kGuard = (1u << 4) | (1u << 9) | (1u << 14);
+  const std::uint32_t p_lo = p & 0x7FFFu, p_hi = p >> 15, q_lo = q & 0x7FFFu, q_hi = q >> 15;
+  return ((((p_hi | kGuard) - q_lo) & ((q_hi | kGuard) - p_lo)) & kGuard) == kGuard;
 }
 
 }  // namespace detail
