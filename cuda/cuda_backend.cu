@@ -213,8 +213,7 @@ __global__ void __launch_bounds__(kBuildBlock)
   if (i < n) {
     const int l = detail::levelFor(diam[i], g);
     const Aabb<S> b = box[i];
-    const Aabb<double> bd{{double(b.lo.x), double(b.lo.y), double(b.lo.z)},
-                          {double(b.hi.x), double(b.hi.y), double(b.hi.z)}};
+    const Aabb<double> bd = toDoubleBox(b);
     level[i] = static_cast<std::uint8_t>(l);
     counts[i] = static_cast<std::uint32_t>(detail::cellRange(bd, l, g).count());
     size_key[i] = ~sizeKey(diam[i]);  // ascending sort = decreasing diameter
@@ -250,8 +249,7 @@ __global__ void __launch_bounds__(kBuildBlock)
   const int cb = info->coord_bits;
   const int l = level[i];
   const Aabb<S> b = box[i];
-  const Aabb<double> bd{{double(b.lo.x), double(b.lo.y), double(b.lo.z)},
-                        {double(b.hi.x), double(b.hi.y), double(b.hi.z)}};
+  const Aabb<double> bd = toDoubleBox(b);
   const detail::CellRange r = detail::cellRange(bd, l, g);
   std::uint32_t e = offsets[rank];
   for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
@@ -316,8 +314,7 @@ __global__ void __launch_bounds__(kBuildBlock)
   const detail::CellId c = kCompact ? compactKeyCell(key[k], info->coord_bits)
                                     : detail::cellOfKey(CellKey{hi[k], key[k]});
   const Aabb<S> b = box[v & kEntryTriMask];
-  const Aabb<double> bd{{double(b.lo.x), double(b.lo.y), double(b.lo.z)},
-                        {double(b.hi.x), double(b.hi.y), double(b.hi.z)}};
+  const Aabb<double> bd = toDoubleBox(b);
   entry_tri[k] = v;
   entry_span[k] = detail::subcellSpan(bd, c.level, c.x, c.y, c.z, info->grid);
 }

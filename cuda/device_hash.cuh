@@ -176,12 +176,17 @@ __device__ __forceinline__ unsigned int sizeKeyOf(double d) {
   return static_cast<unsigned int>(o >> 32);
 }
 
-/// The box of triangle j in double (exact: S -> double never rounds).
+/// A box in double (exact: S -> double never rounds).
 template <class S>
-__device__ __forceinline__ detail::Aabb<double> boxOf(const HashView<S>& h, std::uint32_t j) {
-  const detail::Aabb<S> b = h.box[j];
+__host__ __device__ __forceinline__ detail::Aabb<double> toDoubleBox(const detail::Aabb<S>& b) {
   return {{double(b.lo.x), double(b.lo.y), double(b.lo.z)},
           {double(b.hi.x), double(b.hi.y), double(b.hi.z)}};
+}
+
+/// The box of triangle j in double.
+template <class S>
+__device__ __forceinline__ detail::Aabb<double> boxOf(const HashView<S>& h, std::uint32_t j) {
+  return toDoubleBox(h.box[j]);
 }
 
 /// The device twin of cpu::scanCandidates (src/cpu/scan.h), run by a tile of G lanes (a

@@ -152,25 +152,6 @@ KDET_HD_INLINE bool isCanonicalCell(const Aabb<double>& p, const Aabb<double>& q
 /// wide per side), so a passing span test is followed by the exact box test.
 constexpr int kSubcellBits = 4;
 
-/// The span of box b in cell (cx, cy, cz) of `level`.
-KDET_HD_INLINE std::uint32_t subcellSpan(const Aabb<double>& b, int level, std::int64_t cx,
-                                         std::int64_t cy, std::int64_t cz, const GridParams& g) {
-  const double scale = pow2(kSubcellBits - level);
-  const std::int64_t c[3] = {cx, cy, cz};
-  constexpr std::int64_t kLast = (std::int64_t(1) << kSubcellBits) - 1;
-  std::uint32_t span = 0;
-  for (int a = 0; a < 3; ++a) {
-    const std::int64_t first = c[a] * (kLast + 1);
-    std::int64_t lo = cellCoordScaled(b.lo[a], a, scale, g) - first;
-    std::int64_t hi = cellCoordScaled(b.hi[a], a, scale, g) - first;
-    lo = lo < 0 ? 0 : (lo > kLast ? kLast : lo);
-    hi = hi < 0 ? 0 : (hi > kLast ? kLast : hi);
-    span |= (static_cast<std::uint32_t>(lo) << (5 * a)) |
-            (static_cast<std::uint32_t>(hi) << (15 + 5 * a));
-  }
-  return span;
-}
-
 /// The query side's span for every cell of its range r on `level` at once: the lo fields as in
 /// r's first cell, the hi fields as in r's last cell (subcellSpanInCell makes a cell's span).
 KDET_HD_INLINE std::uint32_t subcellSpanCorners(const Aabb<double>& b, int level,
@@ -187,6 +168,13 @@ KDET_HD_INLINE std::uint32_t subcellSpanCorners(const Aabb<double>& b, int level
             (static_cast<std::uint32_t>(hi) << (15 + 5 * a));
   }
   return span;
+}
+
+/// The span of box b in cell (cx, cy, cz) of `level`: the corners of a one-cell range.
+KDET_HD_INLINE std::uint32_t subcellSpan(const Aabb<double>& b, int level, std::int64_t cx,
+                                         std::int64_t cy, std::int64_t cz, const GridParams& g) {
+  const CellRange one{{cx, cy, cz}, {cx, cy, cz}};
+  return subcellSpanCorners(b, level, one, g);
 }
 
 /// The span of a whole cell (lo 0 and hi 15 on every axis).
