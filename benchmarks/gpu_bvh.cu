@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cuda/staged_upload.h"
 #include "kdet_fcl/detail/pose.h"
 #include "kdet_fcl/detail/triangle_intersection.h"
 
@@ -115,7 +116,7 @@ struct Scratch {
   Buf<unsigned long long> cand, pairs, sorted, counters;
   Buf<uint2> unpacked;
   Buf<unsigned char> cub, mapped;
-  Pinned host_counters, host_pairs, staging;
+  Pinned host_counters, host_pairs;
   std::size_t cand_cap = 0, pair_cap = 0, forced_cap = 0;
   int sms = 0;
   std::size_t bytes() const {
@@ -515,12 +516,22 @@ struct GpuBvh<S>::Impl {
            leaf_tri.bytes() + code.bytes() + code_sorted.bytes() + idx.bytes() + left.bytes() +
            right.bytes() + parent.bytes() + flags.bytes() + bnd.bytes() + cub.bytes();
   }
+  /// Pinned staging of this mesh's uploads (per mesh: two meshes' uploads can be in flight) and
+  /// an event after its last transfer, which the next upload waits for before it rewrites it.
+  Pinned staging;
+  cudaEvent_t staged = nullptr;
+  ~Impl() {
+    if (staged != nullptr) (void)cudaEventDestroy(staged);
+  }
+  /// The same staged, multi-threaded copy as the kDet backend (cuda/staged_upload.h).
   void upload(const std::vector<Vec3<S>>& vertices) {
     if (vertices.size() != nv) throw std::invalid_argument("gpu_bvh: vertex count changed");
     const std::size_t bytes = vertices.size() * sizeof(Vec3<S>);
-    void* h = scratch().staging.reserve(bytes);
-    std::memcpy(h, vertices.data(), bytes);
-    BVH_TRY(cudaMemcpyAsync(v.p, h, bytes, cudaMemcpyHostToDevice, 0));
+    if (staged == nullptr) BVH_TRY(cudaEventCreateWithFlags(&staged, cudaEventDisableTiming));
+    BVH_TRY(cudaEventSynchronize(staged));
+    void* h = staging.reserve(bytes);
+    BVH_TRY(kdet_fcl::staging::stagedUpload(v.p, vertices.data(), bytes, h, 0));
+    BVH_TRY(cudaEventRecord(staged, 0));
   }
   void refit() {
     if (n == 0) return;

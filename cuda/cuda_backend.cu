@@ -44,6 +44,7 @@
 #include "cuda_backend.h"
 #include "cuda_error.cuh"
 #include "device_hash.cuh"
+#include "staged_upload.h"
 #include "kdet_fcl/detail/aabb.h"
 #include "kdet_fcl/detail/enclosing_sphere.h"
 #include "kdet_fcl/detail/hierarchy.h"
@@ -1190,14 +1191,11 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool u
   const std::size_t vbytes = nv * sizeof(Vec3<S>), tbytes = upload_tris ? nt * sizeof(Triangle) : 0;
   m.staging.reserve(vbytes + tbytes);
   char* stage = static_cast<char*>(m.staging.data());
-  if (vbytes) std::memcpy(stage, mesh.vertices.data(), vbytes);
-  if (tbytes) std::memcpy(stage + vbytes, mesh.triangles.data(), tbytes);
   m.v.reserve(nv, false);
-  if (vbytes) CUDA_TRY(cudaMemcpyAsync(m.v.data(), stage, vbytes, cudaMemcpyHostToDevice, s));
+  CUDA_TRY(staging::stagedUpload(m.v.data(), mesh.vertices.data(), vbytes, stage, s));
   if (upload_tris) {
     m.t.reserve(3 * nt, false);
-    if (tbytes)
-      CUDA_TRY(cudaMemcpyAsync(m.t.data(), stage + vbytes, tbytes, cudaMemcpyHostToDevice, s));
+    CUDA_TRY(staging::stagedUpload(m.t.data(), mesh.triangles.data(), tbytes, stage + vbytes, s));
   }
   m.nv = nv;
   m.nt = nt;

@@ -33,7 +33,11 @@
 // read once); KDET_FCL_CUDA_SYNC_REHASH=1 makes every re-hash read its sizes back (the round-3
 // flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell keys everywhere and
 // KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces its fallback); these
-// three are read at every build, for tests.
+// three are read at every build, for tests. KDET_FCL_CUDA_SPANS=0|1 forces the sub-cell span
+// filter off or on (default: chosen per query, read at every query). Uploads of deformed
+// vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
+// threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
+// force the thread count and the chunk size (read at every upload).
 //
 // Cache identity: an entry is reused when the HashedMesh address, version() and a fingerprint
 // (sizes, array addresses, 64 sampled vertices and triangles) all match. A new HashedMesh built
