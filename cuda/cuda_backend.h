@@ -39,6 +39,14 @@
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
 // force the thread count and the chunk size (read at every upload).
 //
+// Self queries of unchanged meshes: a self query's pairs depend on the geometry, not the pose.
+// A self query that finds the same device geometry as the mesh's previous self query keeps its
+// result (a host copy of its pairs) with the mesh, and later self queries with the same predicate and max_pairs return it
+// without device work while the geometry stays (QueryProfile::self_cached): a rigid mesh's self
+// query runs on the device twice, then never again. Any new geometry (updateVertices, setMesh,
+// markDeformed) drops it; a mesh with new geometry at every self query never keeps one.
+// KDET_FCL_CUDA_SELF_CACHE=0 turns this off (read at every query).
+//
 // Cache identity: an entry is reused when the HashedMesh address, version() and a fingerprint
 // (sizes, array addresses, 64 sampled vertices and triangles) all match. A new HashedMesh built
 // at a destroyed one's address with identical sizes and samples would be mistaken for it; making
@@ -83,6 +91,8 @@ struct QueryProfile {
   int rehash_fallbacks = 0;     ///< re-hashes that did not fit and were rebuilt (query rerun)
   int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
+  bool self_cached = false;  ///< a self query answered from the kept result of an unchanged mesh
+                             ///< (no device work, all times 0; KDET_FCL_CUDA_SELF_CACHE=0: never)
 };
 void setProfiling(bool on);
 QueryProfile lastQueryProfile();

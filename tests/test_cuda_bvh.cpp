@@ -10,6 +10,7 @@
 
 #include "gpu_bvh.cuh"
 #include "kdet_fcl/kdet_fcl.h"
+#include "gpu_test_env.h"
 #include "test_util.h"
 
 using namespace kdet_fcl;
@@ -30,6 +31,10 @@ std::vector<TrianglePair> cpuSelf(const TriangleMesh<S>& m) {
   HashedMesh<S> h(m);
   return sorted(intersectSelf(h).pairs);
 }
+
+// Kernels, not kept self results, unless a test asks for them (kdet_test::SelfCacheOffByDefault).
+const ::testing::Environment* const kSelfCacheOff =
+    ::testing::AddGlobalTestEnvironment(new kdet_test::SelfCacheOffByDefault);
 
 template <class S>
 class CudaBvhTyped : public ::testing::Test {};
@@ -84,6 +89,40 @@ TYPED_TEST(CudaBvhTyped, DeformingClothRefitAndRebuildMatchCpu) {
     }
   }
   EXPECT_TRUE(kdet_bvh::intersectSelf(gs).empty());
+}
+
+TEST(CudaBvh, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
+  KDET_SKIP_WITHOUT_DEVICE();
+  // The same rule as kDet's CUDA backend: the third self query on unchanged geometry is answered
+  // from the kept result; new vertices (refit or rebuild) or a new mesh drop it. Every answer is
+  // compared with the CPU, so a stale kept result fails here.
+  kdet_test::ScopedEnv cache_on("KDET_FCL_CUDA_SELF_CACHE", nullptr);  // the default: on
+  const TriangleMesh<double> a = makeRandomSoup<double>(1200, 6.0, 0.3, 1.2, 31);
+  const TriangleMesh<double> b = makeRandomSoup<double>(1200, 6.0, 0.3, 1.2, 32);
+  ASSERT_EQ(a.triangles, b.triangles);
+  const auto want_a = cpuSelf(a), want_b = cpuSelf(b);
+  ASSERT_NE(want_a, want_b);
+  ASSERT_GT(want_a.size(), 20u);
+  kdet_bvh::GpuBvh<double> bvh;
+  bvh.setMesh(a);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(kdet_bvh::intersectSelf(bvh), want_a) << "unchanged " << k;
+  bvh.updateVertices(b.vertices);
+  EXPECT_EQ(kdet_bvh::intersectSelf(bvh), want_b) << "refit";
+  EXPECT_EQ(kdet_bvh::intersectSelf(bvh), want_b) << "refit, kept";
+  EXPECT_EQ(kdet_bvh::intersectSelf(bvh), want_b) << "refit, from the kept result";
+  bvh.rebuildVertices(a.vertices);
+  EXPECT_EQ(kdet_bvh::intersectSelf(bvh), want_a) << "rebuild";
+  EXPECT_EQ(kdet_bvh::intersectSelf(bvh), want_a) << "rebuild, kept";
+  EXPECT_EQ(kdet_bvh::intersectSelf(bvh), want_a) << "rebuild, from the kept result";
+  HashedMesh<double> ha(a);
+  const auto want_double = sorted(intersectSelf(ha, [] {
+                                    QueryOptions o;
+                                    o.predicate = Predicate::Double;
+                                    return o;
+                                  }()).pairs);
+  EXPECT_EQ(kdet_bvh::intersectSelf(bvh, Predicate::Double), want_double) << "other predicate";
+  bvh.setMesh(b);
+  EXPECT_EQ(kdet_bvh::intersectSelf(bvh), want_b) << "setMesh";
 }
 
 TEST(CudaBvh, OutputOverflowGrowsAndReruns) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cuda/staged_upload.h"
+#include "gpu_test_env.h"
 
 namespace {
 
@@ -21,26 +22,7 @@ bool haveDevice() {
   return cudaGetDeviceCount(&n) == cudaSuccess && n > 0;
 }
 
-/// Sets (or, with nullptr, unsets) an environment variable for the scope, then restores it.
-class ScopedEnv {
- public:
-  ScopedEnv(const char* name, const char* value) : name_(name) {
-    if (const char* old = std::getenv(name)) saved_ = std::string(old);
-    if (value != nullptr) setenv(name, value, 1);
-    else unsetenv(name);
-  }
-  ~ScopedEnv() {
-    if (saved_) setenv(name_, saved_->c_str(), 1);
-    else unsetenv(name_);
-  }
-  ScopedEnv(const ScopedEnv&) = delete;
-  ScopedEnv& operator=(const ScopedEnv&) = delete;
-
- private:
-  const char* name_;
-  std::optional<std::string> saved_;
-};
-
+using kdet_test::ScopedEnv;
 using kdet_fcl::staging::stagedUpload;
 using kdet_fcl::staging::uploadChunk;
 using kdet_fcl::staging::uploadThreads;
