@@ -58,7 +58,8 @@ inline int uploadThreads(std::size_t chunks) {
     const unsigned hw = std::thread::hardware_concurrency();
     t = std::min<long long>(kMaxUploadThreads, hw == 0 ? 1 : hw);
   }
-  return int(std::max<long long>(1, std::min<long long>(t, (long long)std::max<std::size_t>(chunks, 1))));
+  const long long most = static_cast<long long>(std::max<std::size_t>(chunks, 1));
+  return static_cast<int>(std::max<long long>(1, std::min(t, most)));
 }
 
 /// Copies `bytes` from pageable host memory `src` to device memory `dst` through the pinned
@@ -97,8 +98,8 @@ inline cudaError_t stagedUpload(void* dst, const void* src, std::size_t bytes, v
   };
   std::vector<std::thread> pool;
   if (threads > 1) {
-    pool.reserve(std::size_t(threads - 1));
     try {
+      pool.reserve(std::size_t(threads - 1));
       for (int i = 1; i < threads; ++i) pool.emplace_back(work);
     } catch (...) {
       // No more threads (std::system_error or bad_alloc): the ones running and this one finish.

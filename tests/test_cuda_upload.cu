@@ -1,6 +1,7 @@
 // The staged host-to-device upload (cuda/staged_upload.h) that the CUDA backend and the GPU BVH
 // baseline share: every byte arrives, nothing beyond the range is written, whatever the number
-// of host threads and the chunk size; the knobs are parsed and bounded. Skips without a device.
+// of host threads and the chunk size; the knobs are parsed and bounded. The copy test skips
+// without a device; the knob and empty-range tests need none.
 
 #include <cuda_runtime.h>
 #include <gtest/gtest.h>
@@ -50,10 +51,10 @@ TEST(StagedUpload, EveryByteArrivesAndNothingBeyondForAnyThreadsAndChunks) {
                                 std::size_t(1) << 20, max_bytes}) {
         SCOPED_TRACE("threads " + std::string(threads) + ", chunk " +
                      (chunk ? chunk : "default") + ", bytes " + std::to_string(bytes));
-        // The source differs per case (a rotated view), so a stale copy would be seen.
+        // The source differs per case (an offset view), so a stale copy would be seen.
         const std::size_t shift = std::size_t(cases++) % 97;
         ASSERT_EQ(cudaMemset(dev, 0xAB, max_bytes + kGuard), cudaSuccess);
-        const std::size_t n = bytes;
+        const std::size_t n = bytes;  // each case's range
         ASSERT_EQ(stagedUpload(dev, src.data() + shift, n, stage, s), cudaSuccess);
         ASSERT_EQ(cudaStreamSynchronize(s), cudaSuccess);
         ASSERT_EQ(cudaMemcpy(back.data(), dev, n + kGuard, cudaMemcpyDeviceToHost), cudaSuccess);
