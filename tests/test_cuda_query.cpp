@@ -238,6 +238,7 @@ TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
 
 TEST(CudaQuery, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
   KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
   kdet_test::ScopedEnv cache_on("KDET_FCL_CUDA_SELF_CACHE", nullptr);  // the default: on
   cuda::setProfiling(true);
   HashedMesh<double> soup(makeRandomSoup<double>(1500, 6.0, 0.3, 1.2, 17));
@@ -296,6 +297,7 @@ TEST(CudaQuery, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
     for (int k = 0; k < 3; ++k) EXPECT_FALSE(gpuSelf("cache off").second);
   }
   cuda::setProfiling(false);
+#endif
 }
 
 TEST(CudaQuery, NewMeshesAtTheSameAddressAreNotConfused) {
