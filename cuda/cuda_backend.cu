@@ -1412,10 +1412,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
 
 /// Whether a self query may keep and return the result of an unchanged mesh (CachedMesh::builds):
 /// KDET_FCL_CUDA_SELF_CACHE=0 turns it off (read at every query, for tests and comparisons).
-bool selfCacheOn() {
-  const char* e = std::getenv("KDET_FCL_CUDA_SELF_CACHE");
-  return !(e && *e == '0');
-}
+bool selfCacheOn() { return !envFlag0("KDET_FCL_CUDA_SELF_CACHE"); }
 
 /// Lanes per query triangle in the candidate search: KDET_FCL_CUDA_TILE = 1, 4, 8, 16 or 32
 /// (default 8; read once). Larger tiles suit heavily loaded cells (crumpled cloth), smaller ones
