@@ -8,9 +8,13 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 BUILD="${ASAN_BUILD_DIR:-build-asan}"
 JOBS="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
-flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all -g -O1"
+# RelWithDebInfo would add -O2 -g: -O1 with line tables (-g1) is all the reports need, and it
+# compiles faster.
+opt="-O1 -g1 -DNDEBUG"
+flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all"
 echo "[sanitize] configuring $BUILD"
-cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS="$flags" \
+cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$opt" -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DKDET_FCL_CUDA=OFF -DKDET_FCL_BUILD_BENCHMARKS=OFF >/dev/null

@@ -54,6 +54,8 @@
 
 #include <fcl/broadphase/broadphase_collision_manager.h>
 
+#include "kdet_fcl/detail/fcl_float_instances.h"
+
 namespace kdet_fcl {
 
 /// FCL broadphase manager on kDet's hierarchical hash of object AABBs (see the file comment).

@@ -67,6 +67,7 @@
 #include <fcl/narrowphase/distance_request.h>
 #include <fcl/narrowphase/distance_result.h>
 
+#include "kdet_fcl/detail/fcl_float_instances.h"
 #include "kdet_fcl/query.h"
 
 namespace kdet_fcl {
