@@ -13,9 +13,10 @@
 //   - cloth over a sphere at 20k, 40k, 90k, 200k, 250k and 1M cloth triangles: 4 frames of
 //     makeDrapedCloth(n, 3, 1, 0.02, t), t = 0.3 .. 1 (the CPU suite's clothScene); the cloth
 //     deforms, the sphere is static; inter + both selfs (the static sphere's self query is
-//     answered from its kept result from the third frame on, by kDet GPU and the LBVH alike;
-//     KDET_FCL_CUDA_SELF_CACHE=0 recomputes it every frame). --big adds a 10M-triangle cloth (2
-//     frames; kDet GPU and LBVH only: the CPU and FCL would take minutes per frame).
+//     answered from its kept result from the third frame on, by kDet GPU, the LBVH and kDet
+//     CPU alike; KDET_FCL_CUDA_SELF_CACHE=0 and KDET_FCL_CPU_SELF_CACHE=0 recompute it every
+//     frame). --big adds a 10M-triangle cloth (2 frames; kDet GPU and LBVH only: the CPU and
+//     FCL would take minutes per frame).
 // Device memory: cuda::deviceBytesInUse() after kDet GPU's first frame of a scene (one frame's
 // meshes resident, plus the backend's scratch), divided by the scene's triangles ("B/tri").
 // Per frame, each method does what a new frame costs it:

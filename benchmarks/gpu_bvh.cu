@@ -17,6 +17,7 @@
 #include "cuda/staged_upload.h"
 #include "kdet_fcl/detail/pose.h"
 #include "kdet_fcl/detail/triangle_intersection.h"
+#include "src/kept_self_result.h"
 
 namespace cg = cooperative_groups;
 using kdet_fcl::Predicate;
@@ -33,12 +34,6 @@ void check(cudaError_t e, const char* what, int line) {
 }
 #define BVH_TRY(x) check((x), #x, __LINE__)
 #define BVH_LAUNCHED() check(cudaGetLastError(), "kernel launch", __LINE__)
-
-/// KDET_FCL_CUDA_SELF_CACHE=0 turns the kept self results off here too (read at every query).
-bool selfCacheOn() {
-  const char* e = std::getenv("KDET_FCL_CUDA_SELF_CACHE");
-  return !(e && *e == '0');
-}
 
 /// Grow-only device buffer (contents not kept on growth).
 template <class T>
@@ -523,19 +518,15 @@ struct GpuBvh<S>::Impl {
            leaf_tri.bytes() + code.bytes() + code_sorted.bytes() + idx.bytes() + left.bytes() +
            right.bytes() + parent.bytes() + flags.bytes() + bnd.bytes() + cub.bytes();
   }
-  /// The self-query result of an unchanged mesh, kept as kDet's CUDA backend keeps it
-  /// (cuda/cuda_backend.h, "Self queries of unchanged meshes"), so both sides of the comparison
-  /// skip the same work: `geometry` counts setMesh/updateVertices/rebuildVertices calls,
-  /// `self_seen` is the count the last self query saw; a self query that sees the same geometry
-  /// as the one before it keeps its pairs for the later ones with the same predicate.
-  std::uint64_t geometry = 0, self_seen = ~0ull;
-  bool self_cached = false;
-  Predicate self_predicate = Predicate::Exact;
-  std::vector<TrianglePair> self_pairs;
+  /// The self-query result of an unchanged mesh, kept by the same rule and code as kDet's
+  /// backends (src/kept_self_result.h; KDET_FCL_CUDA_SELF_CACHE=0 turns it off here too), so
+  /// both sides of the comparison skip the same work. `geometry` counts the setMesh,
+  /// updateVertices and rebuildVertices calls.
+  std::uint64_t geometry = 0;
+  kdet_fcl::detail::KeptSelfResult kept_self;
   void newGeometry() {
     ++geometry;
-    self_cached = false;
-    self_pairs = {};
+    kept_self.drop();
   }
   /// Pinned staging of this mesh's uploads (per mesh: two meshes' uploads can be in flight) and
   /// an event after its last transfer, which the next upload waits for before it rewrites it.
@@ -791,9 +782,14 @@ template <class S>
 std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate) {
   auto& m = M.impl();
   if (m.n < 2) return {};
-  const bool keep = m.self_seen == m.geometry && selfCacheOn();  // same geometry as last time
-  m.self_seen = m.geometry;
-  if (keep && m.self_cached && m.self_predicate == predicate) return m.self_pairs;
+  kdet_fcl::QueryOptions options;
+  options.predicate = predicate;
+  kdet_fcl::detail::KeptSelfResult::Ticket ticket;
+  kdet_fcl::QueryResult kept;
+  if (m.kept_self.find(m.geometry, options,
+                       kdet_fcl::detail::keptSelfResultsOn("KDET_FCL_CUDA_SELF_CACHE"), &kept,
+                       &ticket))
+    return std::move(kept.pairs);
   g_timer.begin();
   std::vector<TrianglePair> out;
   withKernel(predicate, [&](auto k) {
@@ -812,10 +808,10 @@ std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate) {
         });
   });
   g_timer.end();
-  if (keep) {
-    m.self_pairs = out;
-    m.self_predicate = predicate;
-    m.self_cached = true;
+  if (ticket.keep) {
+    kdet_fcl::QueryResult r;
+    r.pairs = out;
+    m.kept_self.offer(ticket, options, r);
   }
   return out;
 }

@@ -51,6 +51,7 @@
 #include "kdet_fcl/detail/pose.h"
 #include "kdet_fcl/detail/triangle_intersection.h"
 #include "kdet_fcl/errors.h"
+#include "kept_self_result.h"
 
 namespace cg = cooperative_groups;
 
@@ -690,18 +691,11 @@ struct CachedMesh {
   // Candidates per query triangle of the last self query of this mesh and of the last inter
   // query it took part in (spansFor()).
   double self_density = 0, inter_density = 0;
-  // A self query's pairs depend on the geometry alone, not on the pose. `builds` counts the
-  // geometries this entry has held (rebuild()); `self_seen` is the count the last self query saw.
-  // A self query that sees the same geometry as the one before it keeps its result (self_cached,
-  // with the options it answered), and later self queries with those options return it while
-  // the geometry stays: a rigid mesh's self query runs on the device twice, then never again. A
-  // mesh with new geometry at every self query never keeps one (it would pay a copy of its pairs
-  // per frame for nothing).
-  std::uint64_t builds = 0, self_seen = ~0ull;
-  bool self_cached = false;
-  Predicate self_predicate = Predicate::Exact;
-  std::size_t self_max_pairs = 0;
-  QueryResult self_result;
+  // `builds` counts the geometries this entry has held (rebuild()): the geometry of the kept
+  // self result (detail::KeptSelfResult's rule: a rigid mesh's self query runs on the device
+  // twice, then never again; a mesh with new geometry at every self query never keeps one).
+  std::uint64_t builds = 0;
+  detail::KeptSelfResult kept_self;
 
   CachedMesh() = default;
   CachedMesh(const CachedMesh&) = delete;
@@ -1213,8 +1207,7 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool u
   m.nt = nt;
   m.pending = false;
   ++m.builds;             // new geometry: a kept self result is of the old one
-  m.self_cached = false;
-  m.self_result = QueryResult{};
+  m.kept_self.drop();
   m.dinfo.reserve(1, false);
   if (nt == 0) {
     m.info = BuildInfo{};
@@ -1409,10 +1402,6 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   }
   return res;
 }
-
-/// Whether a self query may keep and return the result of an unchanged mesh (CachedMesh::builds):
-/// KDET_FCL_CUDA_SELF_CACHE=0 turns it off (read at every query, for tests and comparisons).
-bool selfCacheOn() { return !envFlag0("KDET_FCL_CUDA_SELF_CACHE"); }
 
 /// Lanes per query triangle in the candidate search: KDET_FCL_CUDA_TILE = 1, 4, 8, 16 or 32
 /// (default 8; read once). Larger tiles suit heavily loaded cells (crumpled cloth), smaller ones
@@ -1634,14 +1623,15 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   if (n < 2) return QueryResult{};
   ctx.record(0);
   CachedMesh<S>& M = acquire(ctx, mesh);
-  const bool keep = M.self_seen == M.builds && selfCacheOn();  // same geometry as last time
-  M.self_seen = M.builds;
-  if (keep && M.self_cached && M.self_predicate == options.predicate &&
-      M.self_max_pairs == options.max_pairs) {
+  // KDET_FCL_CUDA_SELF_CACHE=0 turns kept results off (read at every query).
+  detail::KeptSelfResult::Ticket ticket;
+  QueryResult kept;
+  if (M.kept_self.find(M.builds, options, detail::keptSelfResultsOn("KDET_FCL_CUDA_SELF_CACHE"),
+                       &kept, &ticket)) {
     ctx.profile = QueryProfile{};  // nothing ran on the device
     ctx.profile.self_cached = true;
-    ctx.profile.pairs = M.self_result.pairs.size();
-    return M.self_result;
+    ctx.profile.pairs = kept.pairs.size();
+    return kept;
   }
   ctx.record(1);
   const cudaStream_t s = ctx.stream;
@@ -1678,12 +1668,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   PendingBuilds<S> pending{ctx, {&M, nullptr}, {&mesh.mesh(), nullptr}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, options);
   M.self_density = double(ctx.profile.candidates) / double(n);
-  if (keep) {
-    M.self_result = res;
-    M.self_predicate = options.predicate;
-    M.self_max_pairs = options.max_pairs;
-    M.self_cached = true;
-  }
+  M.kept_self.offer(ticket, options, res);
   return res;
 }
 

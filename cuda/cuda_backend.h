@@ -41,11 +41,13 @@
 //
 // Self queries of unchanged meshes: a self query's pairs depend on the geometry, not the pose.
 // A self query that finds the same device geometry as the mesh's previous self query keeps its
-// result (a host copy of its pairs) with the mesh, and later self queries with the same predicate and max_pairs return it
-// without device work while the geometry stays (QueryProfile::self_cached): a rigid mesh's self
-// query runs on the device twice, then never again. Any new geometry (updateVertices, setMesh,
-// markDeformed) drops it; a mesh with new geometry at every self query never keeps one.
-// KDET_FCL_CUDA_SELF_CACHE=0 turns this off (read at every query).
+// result (a host copy of its pairs) with the mesh, and later self queries with the same
+// predicate and max_pairs return it without device work while the geometry stays
+// (QueryResult::kept, QueryProfile::self_cached): a rigid mesh's self query runs on the device
+// twice, then never again. Any new geometry (updateVertices, setMesh, markDeformed) drops it; a
+// mesh with new geometry at every self query never keeps one. The rule and its code are the CPU
+// backend's (src/kept_self_result.h). KDET_FCL_CUDA_SELF_CACHE=0 turns this off (read at every
+// query).
 //
 // Cache identity: an entry is reused when the HashedMesh address, version() and a fingerprint
 // (sizes, array addresses, 64 sampled vertices and triangles) all match. A new HashedMesh built

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "cpu/hierarchical_hash.h"
+#include "kept_self_result.h"
 #include "kdet_fcl/errors.h"
 
 namespace kdet_fcl {
@@ -29,6 +30,7 @@ HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int th
   setPose(pose);
   hash_ = std::make_unique<detail::HierarchicalHash<S>>();
   lazy_ = std::make_unique<Lazy>();
+  kept_self_ = std::make_unique<detail::KeptSelfResult>();
   geometryChanged();
 }
 
@@ -108,6 +110,7 @@ void HashedMesh<S>::geometryChanged() {
     }
   bounds_ = b;
   lazy_->fresh.store(false, std::memory_order_release);
+  kept_self_->drop();  // a kept self result is of the old geometry
   // Versions are unique in the process, so a cache keyed by (address, version) can never mistake
   // a new mesh at a freed mesh's address for the old one.
   static std::atomic<std::uint64_t> next_version{1};

@@ -10,7 +10,7 @@
 
 #include "gpu_bvh.cuh"
 #include "kdet_fcl/kdet_fcl.h"
-#include "gpu_test_env.h"
+#include "scoped_env.h"
 #include "test_util.h"
 
 using namespace kdet_fcl;
@@ -31,10 +31,6 @@ std::vector<TrianglePair> cpuSelf(const TriangleMesh<S>& m) {
   HashedMesh<S> h(m);
   return sorted(intersectSelf(h).pairs);
 }
-
-// Kernels, not kept self results, unless a test asks for them (kdet_test::SelfCacheOffByDefault).
-const ::testing::Environment* const kSelfCacheOff =
-    ::testing::AddGlobalTestEnvironment(new kdet_test::SelfCacheOffByDefault);
 
 template <class S>
 class CudaBvhTyped : public ::testing::Test {};

@@ -14,7 +14,8 @@
 #include <random>
 #include <string>
 
-#include "gpu_test_env.h"
+#include "kept_self_scenario.h"
+#include "scoped_env.h"
 #include "test_util.h"
 
 #if KDET_FCL_TEST_HAVE_CUDA
@@ -65,10 +66,6 @@ std::size_t expectSameSelf(const HashedMesh<S>& m, const std::string& what,
   for (const auto& p : gpu.pairs) EXPECT_LT(p.a, p.b);
   return cpu.pairs.size();
 }
-
-// Kernels, not kept self results, unless a test asks for them (kdet_test::SelfCacheOffByDefault).
-const ::testing::Environment* const kSelfCacheOff =
-    ::testing::AddGlobalTestEnvironment(new kdet_test::SelfCacheOffByDefault);
 
 template <class S>
 class CudaQueryTyped : public ::testing::Test {};
@@ -239,17 +236,15 @@ TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
 TEST(CudaQuery, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
-  kdet_test::ScopedEnv cache_on("KDET_FCL_CUDA_SELF_CACHE", nullptr);  // the default: on
   cuda::setProfiling(true);
   HashedMesh<double> soup(makeRandomSoup<double>(1500, 6.0, 0.3, 1.2, 17));
-  const TriangleMesh<double> moved = makeRandomSoup<double>(1500, 6.0, 0.3, 1.2, 18);
-  ASSERT_EQ(moved.triangles, soup.mesh().triangles);  // same topology, other vertices
   // One GPU self query: its pairs (checked against the CPU) and whether it was answered from a
   // kept result.
   auto gpuSelf = [&](const std::string& what, std::size_t max_pairs = 0,
                      Predicate pred = Predicate::Exact) {
     const QueryResult gpu = intersectSelf(soup, on(Backend::Cuda, max_pairs, pred));
     const bool cached = cuda::lastQueryProfile().self_cached;
+    EXPECT_EQ(gpu.kept, cached) << what;
     const QueryResult cpu = intersectSelf(soup, on(Backend::Cpu, 0, pred));
     std::vector<TrianglePair> want = sorted(cpu.pairs);
     if (max_pairs > 0 && want.size() > max_pairs) want.resize(max_pairs);
@@ -257,45 +252,15 @@ TEST(CudaQuery, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
     EXPECT_EQ(gpu.complete, max_pairs == 0 || gpu.pairs.size() < max_pairs) << what;
     return std::make_pair(gpu.pairs, cached);
   };
-  const auto first = gpuSelf("first build");
-  ASSERT_GT(first.first.size(), 20u);
-  EXPECT_FALSE(first.second);
-  EXPECT_FALSE(gpuSelf("same geometry, computed and kept").second);
-  EXPECT_TRUE(gpuSelf("kept").second);
-  // The pose does not change a self query's pairs; an inter query does not change the geometry.
-  soup.setPose(makeTransform<double>({0, 0, 1}, 0.7, {3.0, -1.0, 2.0}));
-  HashedMesh<double> other(makeSphere<double>({0, 0, 0}, 2.0, 24, 12));
-  expectSameInter(soup, other, "inter between kept self queries");
-  EXPECT_TRUE(gpuSelf("kept after a new pose and an inter query").second);
-  // Other options: computed (the kept result answered other options), then kept for those.
-  EXPECT_FALSE(gpuSelf("Double predicate", 0, Predicate::Double).second);
-  EXPECT_TRUE(gpuSelf("Double predicate again", 0, Predicate::Double).second);
-  EXPECT_FALSE(gpuSelf("max_pairs 7", 7).second);
-  EXPECT_TRUE(gpuSelf("max_pairs 7 again", 7).second);
-  EXPECT_FALSE(gpuSelf("back to all pairs").second);
-  EXPECT_TRUE(gpuSelf("all pairs kept").second);
-  // New geometry drops it: new vertices (other pairs), then the old ones back.
-  soup.updateVertices(moved.vertices);
-  const auto after = gpuSelf("new vertices");
-  EXPECT_FALSE(after.second);
-  EXPECT_NE(after.first, first.first);
-  soup.updateVertices(makeRandomSoup<double>(1500, 6.0, 0.3, 1.2, 17).vertices);
-  EXPECT_FALSE(gpuSelf("old vertices back").second);
-  EXPECT_FALSE(gpuSelf("old vertices, computed and kept").second);
-  EXPECT_TRUE(gpuSelf("old vertices kept").second);
+  kdet_test::runKeptSelfScenario(soup, Backend::Cuda, "KDET_FCL_CUDA_SELF_CACHE", gpuSelf);
+  // Turned on again: the result kept before the queries with it off is still this geometry's.
+  kdet_test::ScopedEnv keep_on("KDET_FCL_CUDA_SELF_CACHE", nullptr);
+  EXPECT_TRUE(gpuSelf("on again").second);
+  // markDeformed is a new geometry on the device.
   cuda::markDeformed(soup);
   EXPECT_FALSE(gpuSelf("markDeformed").second);
   EXPECT_FALSE(gpuSelf("after markDeformed, computed and kept").second);
-  // A new topology drops it.
-  TriangleMesh<double> half = soup.mesh();
-  half.triangles.resize(half.triangles.size() / 2);
-  soup.setMesh(half);
-  EXPECT_FALSE(gpuSelf("half the triangles").second);
-  // Turned off: always computed.
-  {
-    kdet_test::ScopedEnv cache_off("KDET_FCL_CUDA_SELF_CACHE", "0");
-    for (int k = 0; k < 3; ++k) EXPECT_FALSE(gpuSelf("cache off").second);
-  }
+  EXPECT_TRUE(gpuSelf("after markDeformed, kept").second);
   cuda::setProfiling(false);
 #endif
 }

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "cuda/staged_upload.h"
-#include "gpu_test_env.h"
+#include "scoped_env.h"
 
 namespace {
 

@@ -10,6 +10,7 @@
 
 #include "fcl/triangle_contact.h"
 #include "fcl_test_util.h"
+#include "scoped_env.h"
 #include "test_util.h"
 
 using namespace kdet_fcl_test;
@@ -514,6 +515,53 @@ TEST(FclSelfCollide, ConventionsAndContacts) {
   // A shape has no self-collisions.
   fcl::CollisionObjectd box(std::make_shared<fcl::Boxd>(1, 1, 1));
   EXPECT_EQ(kdet_fcl::selfCollide(&box, req, r1), 1u);
+}
+
+TEST(FclSelfCollide, AnUnchangedModelKeepsItsPairsAndAnyChangeIsSeen) {
+  // Kept self results on (the test binaries turn them off by default): repeated selfCollide
+  // calls on an unchanged model are answered from the kept pairs, which must stay the exact
+  // pairs, with contacts at the current pose; every kind of change must be seen.
+  kdet_test::ScopedEnv keep_on("KDET_FCL_CPU_SELF_CACHE", nullptr);
+  TriangleMesh<double> two = kdet_fcl::makeSphere<double>({0, 0, 0}, 1.0, 24, 12);
+  const TriangleMesh<double> s2 = kdet_fcl::makeSphere<double>({0.7, 0.1, 0.2}, 0.8, 24, 12);
+  const auto off = std::uint32_t(two.vertices.size());
+  two.vertices.insert(two.vertices.end(), s2.vertices.begin(), s2.vertices.end());
+  for (auto t : s2.triangles) two.triangles.push_back({t[0] + off, t[1] + off, t[2] + off});
+  auto model = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(two);
+  const fcl::CollisionRequestd req(std::numeric_limits<int>::max(), true);
+  // selfCollide at pose tf: its pairs must be FCL's for `mesh`, its contacts at tf.
+  auto check = [&](const TriangleMesh<double>& mesh, const fcl::Transform3d& tf,
+                   const std::string& what) {
+    fcl::CollisionResultd res;
+    const std::size_t n = kdet_fcl::selfCollide(model.get(), tf, req, res);
+    EXPECT_EQ(n, res.numContacts()) << what;
+    Pairs want;  // the exact ground truth (FCL's own pairs are checked against it above)
+    for (const auto& q : kdet_fcl::bruteForceIntersectSelf(mesh)) want.emplace_back(q.a, q.b);
+    EXPECT_EQ(pairsOf(res, false), want) << what;
+    checkContacts(res, mesh, tf, mesh, tf, 1e-6);
+    return n;
+  };
+  fcl::Transform3d tf = fcl::Transform3d::Identity();
+  EXPECT_GT(check(two, tf, "first"), 10u);
+  for (int k = 0; k < 3; ++k) check(two, tf, "unchanged " + std::to_string(k));
+  tf.translation() << 5, -6, 7;
+  tf.linear() = Eigen::AngleAxisd(0.8, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix();
+  check(two, tf, "unchanged, new pose");
+  // Replaced in place: the second sphere moved apart (no self pairs between the spheres).
+  TriangleMesh<double> apart = two;
+  for (std::size_t v = off; v < apart.vertices.size(); ++v) apart.vertices[v].x += 10.0;
+  std::vector<fcl::Vector3d> ps;
+  for (const auto& v : apart.vertices) ps.emplace_back(v.x, v.y, v.z);
+  model->beginReplaceModel();
+  model->replaceSubModel(ps);
+  model->endReplaceModel();
+  for (int k = 0; k < 3; ++k) check(apart, tf, "apart " + std::to_string(k));
+  // Written directly into the model's vertices (no FCL call): back together.
+  for (std::size_t v = 0; v < two.vertices.size(); ++v)
+    model->vertices[v] = fcl::Vector3d(two.vertices[v].x, two.vertices[v].y, two.vertices[v].z);
+  EXPECT_GT(check(two, tf, "together again"), 10u);
+  for (int k = 0; k < 2; ++k) check(two, tf, "together again " + std::to_string(k));
+  kdet_fcl::forget<double>(model.get());
 }
 
 // ---- (10) pairs that are not mesh-mesh are forwarded to FCL ----

@@ -3,7 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <string>
+#include <thread>
+#include <vector>
 
+#include "kept_self_scenario.h"
+#include "scoped_env.h"
 #include "test_util.h"
 
 using namespace kdet_fcl;
@@ -296,4 +301,64 @@ TEST(Query, EveryPredicateModeMatchesItsBruteForce) {
   t1.addTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
   t2.addTriangle({1, 0, 0}, {0, 1, 0}, {0.3, 0.3, 1});  // shares the edge (1,0,0)-(0,1,0)
   EXPECT_EQ(bruteForceIntersectMeshes(t1, Transform<double>(), t2, Transform<double>()).size(), 1u);
+}
+
+TEST(Query, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
+  HashedMesh<double> soup(makeRandomSoup<double>(1500, 6.0, 0.3, 1.2, 17));
+  // One self query of `soup`: its pairs, order and completeness equal those of a fresh mesh of
+  // the same geometry (whose first self query always runs), and `kept` says whether it ran.
+  auto self = [&](const std::string& what, std::size_t max_pairs, Predicate pred,
+                  int threads = 0) {
+    QueryOptions o;
+    o.max_pairs = max_pairs;
+    o.predicate = pred;
+    o.threads = threads;
+    const QueryResult got = intersectSelf(soup, o);
+    const HashedMesh<double> fresh(soup.mesh());
+    const QueryResult want = intersectSelf(fresh, o);
+    EXPECT_FALSE(want.kept) << what;
+    EXPECT_EQ(got.pairs, want.pairs) << what;
+    EXPECT_EQ(got.complete, want.complete) << what;
+    if (got.kept) EXPECT_EQ(got.stats.lookups, 0u) << what << ": a kept answer does no work";
+    else EXPECT_GT(got.stats.lookups, 0u) << what;
+    if (pred == Predicate::Exact && max_pairs == 0)
+      EXPECT_EQ(sorted(got.pairs), bruteForceIntersectSelf(soup.mesh())) << what;
+    return std::make_pair(got.pairs, got.kept);
+  };
+  kdet_test::runKeptSelfScenario(soup, Backend::Cpu, "KDET_FCL_CPU_SELF_CACHE", self);
+  // Turned on again: the result kept before the queries with it off is still this geometry's.
+  kdet_test::ScopedEnv keep_on("KDET_FCL_CPU_SELF_CACHE", nullptr);
+  EXPECT_TRUE(self("on again", 0, Predicate::Exact).second);
+  // The thread count does not matter to the pairs, so not to a kept answer either.
+  EXPECT_TRUE(self("kept, one thread", 0, Predicate::Exact, 1).second);
+  EXPECT_TRUE(self("kept, three threads", 0, Predicate::Exact, 3).second);
+  // A moved mesh takes its kept result along; a new mesh in the moved-from object has none.
+  HashedMesh<double> taken(std::move(soup));
+  soup = HashedMesh<double>(taken.mesh());
+  EXPECT_TRUE(intersectSelf(taken).kept);
+  EXPECT_FALSE(self("a new mesh in the moved-from object", 0, Predicate::Exact).second);
+}
+
+TEST(Query, ConcurrentSelfQueriesOfAnUnchangedMeshAllGetItsPairs) {
+  kdet_test::ScopedEnv keep_on("KDET_FCL_CPU_SELF_CACHE", nullptr);
+  const HashedMesh<float> mesh(makeRandomSoup<float>(2000, 6.0, 0.3, 1.2, 23));
+  const std::vector<TrianglePair> want = bruteForceIntersectSelf(mesh.mesh());
+  ASSERT_GT(want.size(), 20u);
+  // The first queries compute and one keeps; the others may compute or answer from the kept
+  // result while it is stored: every one must get the same pairs.
+  std::vector<int> wrong(8, 0);
+  std::vector<std::thread> workers;
+  for (int w = 0; w < 8; ++w)
+    workers.emplace_back([&, w] {
+      QueryOptions o;
+      o.threads = 1;
+      for (int k = 0; k < 12; ++k)
+        if (sorted(intersectSelf(mesh, o).pairs) != want) ++wrong[w];
+    });
+  for (std::thread& t : workers) t.join();
+  for (int w = 0; w < 8; ++w) EXPECT_EQ(wrong[w], 0) << "worker " << w;
+  // After queries of the same geometry, one of them kept its result.
+  const QueryResult last = intersectSelf(mesh);
+  EXPECT_TRUE(last.kept);
+  EXPECT_EQ(sorted(last.pairs), want);
 }

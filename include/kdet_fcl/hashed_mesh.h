@@ -29,6 +29,7 @@ struct HierarchyStats {
 namespace detail {
 template <class S>
 class HierarchicalHash;
+class KeptSelfResult;
 }
 
 /// A mesh hashed in its own frame plus a rigid pose.
@@ -106,6 +107,9 @@ class HashedMesh {
   /// start no lower than from_level (see cpu::intersectMeshes).
   const detail::HierarchicalHash<S>& hashFrom(int from_level) const;
 
+  /// Internal: the CPU backend's kept self-query result of this mesh (see QueryResult::kept).
+  detail::KeptSelfResult& keptSelf() const { return *kept_self_; }
+
  private:
   /// After a geometry change: a new version, fresh bounds, the CPU hash marked stale.
   void geometryChanged();
@@ -119,6 +123,7 @@ class HashedMesh {
   // without allocating).
   std::unique_ptr<detail::HierarchicalHash<S>> hash_;
   std::unique_ptr<Lazy> lazy_;
+  std::unique_ptr<detail::KeptSelfResult> kept_self_;
   std::uint64_t version_ = 0;
   int threads_ = 0;
 };

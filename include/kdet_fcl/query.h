@@ -51,6 +51,12 @@ struct QueryResult {
   std::vector<TrianglePair> pairs;
   /// False when max_pairs pairs were found: the query stopped there and more pairs may exist.
   bool complete = true;
+  /// True when a self query was answered from the result kept for the mesh's unchanged geometry:
+  /// no work ran, and `stats` is zero. A self query that sees the same geometry (not pose) as
+  /// the mesh's previous self query keeps its result; later self queries of that geometry with the
+  /// same predicate and max_pairs return it, on either backend (each keeps its own). Any change of
+  /// geometry drops it. KDET_FCL_CPU_SELF_CACHE=0 / KDET_FCL_CUDA_SELF_CACHE=0 turn it off.
+  bool kept = false;
   QueryStats stats;
 };
 

@@ -20,6 +20,7 @@
 #include "kdet_fcl/detail/triangle_intersection.h"
 #include "kdet_fcl/errors.h"
 #include "kdet_fcl/query.h"
+#include "kept_self_result.h"
 
 namespace kdet_fcl {
 namespace cpu {
@@ -240,7 +241,7 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
 }
 
 template <class S>
-QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
+QueryResult computeSelf(const HashedMesh<S>& M, const QueryOptions& options) {
   const TriangleMesh<S>& m = M.mesh();
   const HierarchicalHash<S>& h = M.hash();
   const std::size_t n = m.triangles.size();
@@ -279,6 +280,21 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
       if (!go) return;
     }
   });
+}
+
+/// A self query, answered from the mesh's kept result when its geometry did not change (see
+/// QueryResult::kept and detail::KeptSelfResult); the threads do not matter to the pairs.
+template <class S>
+QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
+  detail::KeptSelfResult& kept = M.keptSelf();
+  detail::KeptSelfResult::Ticket ticket;
+  QueryResult r;
+  if (kept.find(M.version(), options, detail::keptSelfResultsOn("KDET_FCL_CPU_SELF_CACHE"), &r,
+                &ticket))
+    return r;
+  r = computeSelf(M, options);
+  kept.offer(ticket, options, r);
+  return r;
 }
 
 }  // namespace cpu
