@@ -529,13 +529,13 @@ TEST(FclSelfCollide, AnUnchangedModelKeepsItsPairsAndAnyChangeIsSeen) {
   for (auto t : s2.triangles) two.triangles.push_back({t[0] + off, t[1] + off, t[2] + off});
   auto model = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(two);
   const fcl::CollisionRequestd req(std::numeric_limits<int>::max(), true);
-  // selfCollide at pose tf: its pairs must be FCL's for `mesh`, its contacts at tf.
+  // selfCollide at pose tf: its pairs must be the exact pairs of `mesh`, its contacts at tf.
   auto check = [&](const TriangleMesh<double>& mesh, const fcl::Transform3d& tf,
                    const std::string& what) {
     fcl::CollisionResultd res;
     const std::size_t n = kdet_fcl::selfCollide(model.get(), tf, req, res);
     EXPECT_EQ(n, res.numContacts()) << what;
-    Pairs want;  // the exact ground truth (FCL's own pairs are checked against it above)
+    Pairs want;  // the exact ground truth (checkSelf above compares selfCollide with FCL)
     for (const auto& q : kdet_fcl::bruteForceIntersectSelf(mesh)) want.emplace_back(q.a, q.b);
     EXPECT_EQ(pairsOf(res, false), want) << what;
     checkContacts(res, mesh, tf, mesh, tf, 1e-6);
