@@ -523,7 +523,7 @@ struct GpuBvh<S>::Impl {
   /// both sides of the comparison skip the same work. `geometry` counts the setMesh,
   /// updateVertices and rebuildVertices calls.
   std::uint64_t geometry = 0;
-  kdet_fcl::detail::KeptSelfResult kept_self;
+  kdet_fcl::detail::KeptSelfResult kept_self{"KDET_FCL_CUDA_SELF_CACHE"};
   void newGeometry() {
     ++geometry;
     kept_self.drop();
@@ -786,10 +786,7 @@ std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate) {
   options.predicate = predicate;
   kdet_fcl::detail::KeptSelfResult::Ticket ticket;
   kdet_fcl::QueryResult kept;
-  if (m.kept_self.find(m.geometry, options,
-                       kdet_fcl::detail::keptSelfResultsOn("KDET_FCL_CUDA_SELF_CACHE"), &kept,
-                       &ticket))
-    return std::move(kept.pairs);
+  if (m.kept_self.find(m.geometry, options, &kept, &ticket)) return std::move(kept.pairs);
   g_timer.begin();
   std::vector<TrianglePair> out;
   withKernel(predicate, [&](auto k) {

@@ -695,7 +695,7 @@ struct CachedMesh {
   // self result (detail::KeptSelfResult's rule: a rigid mesh's self query runs on the device
   // twice, then never again; a mesh with new geometry at every self query never keeps one).
   std::uint64_t builds = 0;
-  detail::KeptSelfResult kept_self;
+  detail::KeptSelfResult kept_self{"KDET_FCL_CUDA_SELF_CACHE"};
 
   CachedMesh() = default;
   CachedMesh(const CachedMesh&) = delete;
@@ -1623,11 +1623,9 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   if (n < 2) return QueryResult{};
   ctx.record(0);
   CachedMesh<S>& M = acquire(ctx, mesh);
-  // KDET_FCL_CUDA_SELF_CACHE=0 turns kept results off (read at every query).
   detail::KeptSelfResult::Ticket ticket;
   QueryResult kept;
-  if (M.kept_self.find(M.builds, options, detail::keptSelfResultsOn("KDET_FCL_CUDA_SELF_CACHE"),
-                       &kept, &ticket)) {
+  if (M.kept_self.find(M.builds, options, &kept, &ticket)) {
     ctx.profile = QueryProfile{};  // nothing ran on the device
     ctx.profile.self_cached = true;
     ctx.profile.pairs = kept.pairs.size();

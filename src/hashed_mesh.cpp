@@ -30,7 +30,7 @@ HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int th
   setPose(pose);
   hash_ = std::make_unique<detail::HierarchicalHash<S>>();
   lazy_ = std::make_unique<Lazy>();
-  kept_self_ = std::make_unique<detail::KeptSelfResult>();
+  kept_self_ = std::make_unique<detail::KeptSelfResult>("KDET_FCL_CPU_SELF_CACHE");
   geometryChanged();
 }
 

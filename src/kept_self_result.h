@@ -12,14 +12,6 @@
 namespace kdet_fcl {
 namespace detail {
 
-/// Whether self results may be kept: true unless the environment variable `knob` starts with 0
-/// (KDET_FCL_CPU_SELF_CACHE for the CPU backend, KDET_FCL_CUDA_SELF_CACHE for the CUDA one).
-/// Read at every query, so a test or a benchmark can change it between queries.
-inline bool keptSelfResultsOn(const char* knob) {
-  const char* e = std::getenv(knob);
-  return !(e && *e == '0');
-}
-
 /// A self query's pairs depend on the mesh's geometry alone, not on its pose. The rule:
 ///  - A self query that sees the same geometry as the mesh's previous self query keeps its
 ///    result, with its predicate and max_pairs.
@@ -32,6 +24,11 @@ inline bool keptSelfResultsOn(const char* knob) {
 /// of one mesh may each compute; each keeps or answers under the mutex.
 class KeptSelfResult {
  public:
+  /// `knob`: the environment variable whose value 0 turns keeping off (KDET_FCL_CPU_SELF_CACHE
+  /// for the CPU backend, KDET_FCL_CUDA_SELF_CACHE for the CUDA one and the LBVH baseline). It is
+  /// read at every query, so a test or a benchmark can change it between queries.
+  explicit KeptSelfResult(const char* knob) : knob_(knob) {}
+
   /// What find() decided for the query: whether offer() keeps its result, and for which geometry.
   struct Ticket {
     bool keep = false;
@@ -40,9 +37,11 @@ class KeptSelfResult {
 
   /// At the start of a self query of `geometry` with `options`. Returns true, with the kept
   /// result in *out, when that answers the query. Otherwise the query runs, and its result goes
-  /// to offer() with *ticket. `enabled` false: nothing is answered or kept.
-  bool find(std::uint64_t geometry, const QueryOptions& options, bool enabled, QueryResult* out,
+  /// to offer() with *ticket. With the knob at 0, nothing is answered or kept.
+  bool find(std::uint64_t geometry, const QueryOptions& options, QueryResult* out,
             Ticket* ticket) {
+    const char* e = std::getenv(knob_);
+    const bool enabled = !(e && *e == '0');
     std::lock_guard<std::mutex> lock(mutex_);
     ticket->geometry = geometry;
     ticket->keep = enabled && seen_ == geometry;  // the same geometry as the previous self query
@@ -77,6 +76,7 @@ class KeptSelfResult {
   }
 
  private:
+  const char* knob_;
   std::mutex mutex_;
   std::uint64_t seen_ = ~std::uint64_t{0};  // the geometry of the previous self query
   bool cached_ = false;

@@ -1,8 +1,6 @@
 #pragma once
 // kdet_test::ScopedEnv: tests that turn the library's environment knobs (KDET_FCL_*) on and off.
 
-#include <gtest/gtest.h>
-
 #include <cstdlib>
 #include <optional>
 #include <string>

@@ -289,9 +289,7 @@ QueryResult intersectSelf(const HashedMesh<S>& M, const QueryOptions& options) {
   detail::KeptSelfResult& kept = M.keptSelf();
   detail::KeptSelfResult::Ticket ticket;
   QueryResult r;
-  if (kept.find(M.version(), options, detail::keptSelfResultsOn("KDET_FCL_CPU_SELF_CACHE"), &r,
-                &ticket))
-    return r;
+  if (kept.find(M.version(), options, &r, &ticket)) return r;
   r = computeSelf(M, options);
   kept.offer(ticket, options, r);
   return r;
