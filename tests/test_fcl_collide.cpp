@@ -561,6 +561,16 @@ TEST(FclSelfCollide, AnUnchangedModelKeepsItsPairsAndAnyChangeIsSeen) {
     model->vertices[v] = fcl::Vector3d(two.vertices[v].x, two.vertices[v].y, two.vertices[v].z);
   EXPECT_GT(check(two, tf, "together again"), 10u);
   for (int k = 0; k < 2; ++k) check(two, tf, "together again " + std::to_string(k));
+  // A NaN written into a model that holds kept pairs is still refused, and the next valid
+  // query after the repair is exact again.
+  const fcl::Vector3d saved = model->vertices[3];
+  model->vertices[3].x() = std::numeric_limits<double>::quiet_NaN();
+  {
+    fcl::CollisionResultd res;
+    EXPECT_THROW(kdet_fcl::selfCollide(model.get(), tf, req, res), kdet_fcl::InvalidInputError);
+  }
+  model->vertices[3] = saved;
+  EXPECT_GT(check(two, tf, "after the NaN"), 10u);
   kdet_fcl::forget<double>(model.get());
 }
 
