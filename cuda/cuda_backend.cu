@@ -431,6 +431,27 @@ __global__ void mapVerticesKernel(std::uint32_t n, const Vec3<S>* __restrict__ v
 }
 
 
+/// The self query's adjacency rule, applied before a candidate is emitted: pairs sharing a vertex
+/// index or coordinates never reach phase 2 (on a connected mesh they are most of the
+/// box-overlapping pairs). Triangle i's indices and vertices are loaded here, where they are
+/// needed (cache hits), instead of being held in registers through the whole scan.
+template <class S>
+__device__ __forceinline__ bool adjacentTriangles(const HashView<S>& M, std::uint32_t i,
+                                                  std::uint32_t j) {
+  const std::uint32_t ti[3] = {__ldg(M.t + 3 * i), __ldg(M.t + 3 * i + 1), __ldg(M.t + 3 * i + 2)};
+  const std::uint32_t tj[3] = {M.t[3 * j], M.t[3 * j + 1], M.t[3 * j + 2]};
+  bool adjacent = false;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b];
+  if (!adjacent) {
+    const Vec3<S> vi[3] = {M.v[ti[0]], M.v[ti[1]], M.v[ti[2]]};
+    const Vec3<S> vj[3] = {M.v[tj[0]], M.v[tj[1]], M.v[tj[2]]};
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) adjacent = adjacent || vi[a] == vj[b];
+  }
+  return adjacent;
+}
+
 /// Phase 1 of an inter-object query: candidate pairs (i of A, j of B) that pass the size rule,
 /// the box test and the canonical-cell test, appended to `cand` as (i << 32) | j. Threads
 /// [0, na): A's triangle i against B's triangles with d_j >= d_i (looked up in B's frame with A's
@@ -497,24 +518,108 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       M, cInfo(0), boxOf(M, i), di, tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
-        // Adjacent pairs (a shared vertex index or coordinate) never reach phase 2: on a
-        // connected mesh they are most of the box-overlapping pairs. Triangle i's indices and
-        // vertices are (re)loaded here, where they are needed (cache hits), instead of being
-        // held in registers through the whole scan, where a register cap would spill them.
-        const std::uint32_t ti[3] = {__ldg(M.t + 3 * i), __ldg(M.t + 3 * i + 1),
-                                     __ldg(M.t + 3 * i + 2)};
-        const Vec3<S> vi[3] = {M.v[ti[0]], M.v[ti[1]], M.v[ti[2]]};
-        const std::uint32_t tj[3] = {M.t[3 * j], M.t[3 * j + 1], M.t[3 * j + 2]};
-        bool adjacent = false;
-        for (int a = 0; a < 3; ++a)
-          for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b];
-        if (!adjacent) {
-          const Vec3<S> vj[3] = {M.v[tj[0]], M.v[tj[1]], M.v[tj[2]]};
-          for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) adjacent = adjacent || vi[a] == vj[b];
-        }
-        if (!adjacent) emitPair(cand, i, j);
+        if (!adjacentTriangles(M, i, j)) emitPair(cand, i, j);
       });
+}
+
+/// Phase 1 of a self query with the warp-wide scan (scanCandidatesWarp): 2^log_p lanes per query
+/// triangle, the same candidates as selfCandidatesKernel.
+template <class S, int MB, bool kSpans>
+__global__ void __launch_bounds__(kQueryBlock, MB)
+    selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
+                             std::uint32_t max_visit, PairSink cand) {
+  __shared__ WarpQuery slots[kQueryBlock];
+  WarpQuery* q = slots + (threadIdx.x & ~31u);
+  const std::uint32_t lane = threadIdx.x & 31u;
+  const std::uint32_t warp = (blockIdx.x * blockDim.x + threadIdx.x) >> 5;
+  const std::uint32_t i = (warp << (5 - log_p)) + (lane >> log_p);
+  if (__all_sync(0xFFFFFFFFu, i >= n)) return;  // a warp past the end (warp-uniform)
+  WarpQuery mine;
+  mine.id = i;
+  mine.d = 0;
+  mine.live = 0;
+  if (i < n) {
+    mine.d = M.diam[i];
+    mine.box = detail::intersectBoxes(boxOf(M, i), cInfo(0).bounds);
+    mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
+  }
+  if ((lane & ((1u << log_p) - 1)) == 0) q[lane >> log_p] = mine;
+  __syncwarp();
+  scanCandidatesWarp<kSpans>(
+      M, cInfo(0), q, log_p, max_visit,
+      [&](const WarpQuery& o, std::uint32_t j, double dj) {
+        return dj > o.d || (dj == o.d && j > o.id);
+      },
+      [&](const WarpQuery& o, std::uint32_t j) {
+        if (!adjacentTriangles(M, o.id, j)) emitPair(cand, o.id, j);
+      });
+}
+
+/// Phase 1 of an inter-object query with the warp-wide scan: the same candidates as
+/// interCandidatesKernel, 2^log_p lanes per query triangle. The first wa = ceil(na / (32 >> log_p))
+/// warps query A's triangles in B's hash, the next ones B's triangles in A's hash (so no warp
+/// mixes the two).
+template <class S, int MB, bool kSpans>
+__global__ void __launch_bounds__(kQueryBlock, MB)
+    interCandidatesWarpKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
+                              std::uint32_t na, std::uint32_t nb, bool identity,
+                              Transform<double> b_to_a, double eps_coef, double eps_tmag,
+                              unsigned int log_p, std::uint32_t max_visit, PairSink cand) {
+  __shared__ WarpQuery slots[kQueryBlock];
+  WarpQuery* q = slots + (threadIdx.x & ~31u);
+  const std::uint32_t warp = (blockIdx.x * blockDim.x + threadIdx.x) >> 5;
+  const std::uint32_t lane = threadIdx.x & 31u;
+  const std::uint32_t per_warp = 32u >> log_p;
+  const std::uint32_t wa = (na + per_warp - 1) / per_warp;
+  const bool a_side = warp < wa;
+  const std::uint32_t idx = (a_side ? warp : warp - wa) * per_warp + (lane >> log_p);
+  const std::uint32_t nq = a_side ? na : nb;
+  if (!a_side && warp - wa >= (nb + per_warp - 1) / per_warp) return;  // past the end (uniform)
+  WarpQuery mine;
+  mine.id = idx;
+  mine.d = 0;
+  mine.live = 0;
+  const BuildInfo& target = cInfo(a_side ? 1 : 0);
+  if (idx < nq) {
+    Aabb<double> box;
+    if (a_side) {
+      mine.d = A.diam[idx];
+      box = detail::triangleBox<double>(va[A.t[3 * idx]], va[A.t[3 * idx + 1]],
+                                        va[A.t[3 * idx + 2]]);
+    } else {
+      mine.d = B.diam[idx];
+      if (identity) {
+        box = boxOf(B, idx);
+      } else {
+        Vec3<double> p[3];
+        for (int k = 0; k < 3; ++k) {
+          const Vec3<S> w = B.v[B.t[3 * idx + k]];
+          p[k] = b_to_a.apply(Vec3<double>{double(w.x), double(w.y), double(w.z)});
+        }
+        // As in interCandidatesKernel: B's box mapped back, grown by the rounding bound.
+        double mag = eps_tmag;
+        for (int k = 0; k < 3; ++k)
+          mag += fmax(fabs(cInfo(0).bounds.lo[k]), fabs(cInfo(0).bounds.hi[k])) +
+                 fmax(fabs(cInfo(1).bounds.lo[k]), fabs(cInfo(1).bounds.hi[k]));
+        const double eps = eps_coef * mag + 2.2250738585072014e-308;
+        box = detail::inflate(detail::triangleBox<double>(p[0], p[1], p[2]), eps);
+      }
+    }
+    // Nothing in the other mesh is large enough (A: d_j >= d_i; B: d_i > d_j).
+    const bool none = a_side ? mine.d > cInfo(1).d_max : mine.d >= cInfo(0).d_max;
+    mine.box = detail::intersectBoxes(box, target.bounds);
+    mine.live = (none || detail::isEmpty(mine.box)) ? 0u : 1u;
+  }
+  if ((lane & ((1u << log_p) - 1)) == 0) q[lane >> log_p] = mine;
+  __syncwarp();
+  if (a_side)
+    scanCandidatesWarp<kSpans>(
+        B, target, q, log_p, max_visit, [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
+        [&](const WarpQuery& o, std::uint32_t j) { emitPair(cand, o.id, j); });
+  else
+    scanCandidatesWarp<kSpans>(
+        A, target, q, log_p, max_visit, [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
+        [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
 }
 
 /// Phase 2: the exact test of each candidate (grid-stride over the device-side count, so the
@@ -1431,6 +1536,49 @@ bool spansFor(double density) {
   return density > 4.0;
 }
 
+/// Whether phase 1 runs the warp-wide scan (scanCandidatesWarp: one lane per query triangle, the
+/// warp testing the entries of its 32 queries' cells together) or the tile scan
+/// (scanCandidatesGroup: a tile of tileSize() lanes per query triangle):
+/// KDET_FCL_CUDA_SCAN = warp or tile (default warp; read at every query, so tests and benchmarks
+/// can compare the two). Both find the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
+bool warpScan() {
+  const char* e = std::getenv("KDET_FCL_CUDA_SCAN");
+  if (e != nullptr && std::strcmp(e, "tile") == 0) return false;
+  return true;
+}
+
+/// Lanes per query triangle of the warp-wide scan, as log2, from the number of queries and the
+/// candidates per query triangle of the last query of the same kind on the same meshes (as
+/// spansFor). More lanes per query cut the work into more, smaller warps: that pays until the
+/// warps fill the device several times over (a finer grain leaves a shorter tail of busy warps),
+/// and always where cells are crowded. So: 8 lanes when the density exceeds 4; else the fewest
+/// lanes (1, 2, 4, 8) that give at least 4 x 32 lanes per resident warp of the 64-register kernel
+/// (32 warps per SM). Measured on an H100 (benchmarks/RESULTS-gpu.md): the cloth ball and two
+/// frames want 8, the 1M cloth 1, the 250k cloth and the n-body pair 2, the 90k-200k cloths 4.
+/// KDET_FCL_CUDA_WARP_LANES = 1, 2, 4, 8, 16 or 32 forces it (read at every query).
+unsigned int warpLanesLog2(unsigned long long queries, double density) {
+  const char* e = std::getenv("KDET_FCL_CUDA_WARP_LANES");
+  if (e != nullptr && *e) {
+    const int v = std::atoi(e);
+    for (unsigned int l = 0; l <= 5; ++l)
+      if (v == (1 << l)) return l;
+  }
+  if (density > 4.0) return 3;
+  const unsigned long long fill = 4ull * 32ull * 32ull * static_cast<unsigned long long>(g_num_sms);
+  unsigned int l = 0;
+  while (l < 3 && (queries << l) < fill) ++l;
+  return l;
+}
+
+/// The most entries of one cell that the warp-wide scan takes in one visit (larger cells are cut
+/// into chunks): kMaxWarpVisit, or KDET_FCL_CUDA_WARP_VISIT (1 .. kMaxWarpVisit) so that tests
+/// can cut every cell.
+std::uint32_t warpVisit() {
+  const char* e = std::getenv("KDET_FCL_CUDA_WARP_VISIT");
+  const long v = (e != nullptr && *e) ? std::atol(e) : 0;
+  return (v >= 1 && v <= long(kMaxWarpVisit)) ? std::uint32_t(v) : kMaxWarpVisit;
+}
+
 /// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
 /// KDET_FCL_CUDA_MINBLOCKS = 1 (no cap, ~100 registers), 8 (default: at most 64 registers) or 12
 /// (at most 40). The 40-register kernel has twice the occupancy of the 64-register one but spills
@@ -1582,19 +1730,35 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
   const bool spans = spansFor(std::max(A.inter_density, B.inter_density));
+  const bool warp = warpScan();
   ctx.profile.spans = spans;
+  ctx.profile.warp_scan = warp;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
     bindInfo(s, A, &B);
-    withTile([&](auto g, auto mb) {
-      constexpr int G = decltype(g)::value;
-      constexpr int MB = decltype(mb)::value;
-      const auto kernel = spans ? interCandidatesKernel<S, G, MB, true>
-                                : interCandidatesKernel<S, G, MB, false>;
-      kernel<<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
-          av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, cand);
-    });
+    if (warp) {
+      const unsigned int log_p =
+          warpLanesLog2(na + nb, std::max(A.inter_density, B.inter_density));
+      ctx.profile.warp_lanes = 1 << log_p;
+      const unsigned long long per_warp = 32u >> log_p;
+      const unsigned long long warps =
+          (na + per_warp - 1) / per_warp + (nb + per_warp - 1) / per_warp;
+      const auto kernel = spans ? interCandidatesWarpKernel<S, 8, true>
+                                : interCandidatesWarpKernel<S, 8, false>;
+      kernel<<<blocksFor(32 * warps, kQueryBlock), kQueryBlock, 0, s>>>(
+          av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, log_p, warpVisit(),
+          cand);
+    } else {
+      withTile([&](auto g, auto mb) {
+        constexpr int G = decltype(g)::value;
+        constexpr int MB = decltype(mb)::value;
+        const auto kernel = spans ? interCandidatesKernel<S, G, MB, true>
+                                  : interCandidatesKernel<S, G, MB, false>;
+        kernel<<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
+            av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, cand);
+      });
+    }
     checkLaunch();
     ctx.record(4);
     PairSink in = cand;
@@ -1637,17 +1801,29 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
   const bool spans = spansFor(M.self_density);
+  const bool warp = warpScan();
   ctx.profile.spans = spans;
+  ctx.profile.warp_scan = warp;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
     const HashView<S> mv = M.view();
     bindInfo<S>(s, M, nullptr);
-    withTile([&](auto g, auto mb) {
-      constexpr int G = decltype(g)::value;
-      constexpr int MB = decltype(mb)::value;
+    if (warp) {
       const auto kernel =
-          spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
-      kernel<<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, cand);
-    });
+          spans ? selfCandidatesWarpKernel<S, 8, true> : selfCandidatesWarpKernel<S, 8, false>;
+      const unsigned int log_p = warpLanesLog2(n, M.self_density);
+      ctx.profile.warp_lanes = 1 << log_p;
+      const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
+      kernel<<<blocksFor(32 * warps, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, log_p,
+                                                                        warpVisit(), cand);
+    } else {
+      withTile([&](auto g, auto mb) {
+        constexpr int G = decltype(g)::value;
+        constexpr int MB = decltype(mb)::value;
+        const auto kernel =
+            spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
+        kernel<<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, cand);
+      });
+    }
     checkLaunch();
     ctx.record(4);
     PairSink in = cand;

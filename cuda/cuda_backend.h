@@ -93,6 +93,8 @@ struct QueryProfile {
   int rehash_fallbacks = 0;     ///< re-hashes that did not fit and were rebuilt (query rerun)
   int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
+  bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
+  int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)
   bool self_cached = false;  ///< a self query answered from the kept result of an unchanged mesh
                              ///< (no device work, all times 0; KDET_FCL_CUDA_SELF_CACHE=0: never)
 };

@@ -266,6 +266,163 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
   }
 }
 
+/// One lane's query in the warp-wide scan (scanCandidatesWarp), in shared memory so that every
+/// lane can test entries of every other lane's query.
+struct WarpQuery {
+  detail::Aabb<double> box;  ///< the query box clipped to the hash's bounds
+  double d;                  ///< the query triangle's diameter
+  std::uint32_t id;          ///< the caller's index of the query triangle
+  std::uint32_t live;        ///< 1: the lane has a query (0: idle lane, or an empty clipped box)
+};
+
+/// A lane's position in its query's lookups: level L (past top_level: done), the level's cell
+/// range as a first cell and extents, the next cell's offsets, and what is left of a cell that
+/// was cut into chunks (max_visit).
+struct LookupCursor {
+  std::int64_t lo[3];
+  int n[3];
+  int dx, dy, dz;
+  int L;
+  std::uint32_t pos;      ///< cells passed so far (the lane probes those of its residue)
+  std::uint32_t corners;  ///< sub-cell span corners of the level (kSpans only)
+  std::uint32_t rest_begin, rest_end, rest_ends;
+};
+
+/// The most entries of one cell handed to the warp in one visit: a larger cell is visited in
+/// chunks, so the 32 lanes' entry counts always sum to less than 2^31. (The backend passes a
+/// smaller bound only for tests: KDET_FCL_CUDA_WARP_VISIT.)
+constexpr std::uint32_t kMaxWarpVisit = 1u << 25;
+
+/// Moves the cursor to the first level >= L0 that holds triangles (past top_level if none).
+template <bool kSpans>
+__device__ __forceinline__ void startLevel(LookupCursor& c, const detail::Aabb<double>& box,
+                                           const BuildInfo& info, int L0) {
+  for (int L = L0; L <= info.top_level; ++L) {
+    if (!((info.level_mask >> L) & 1ull)) continue;
+    const detail::CellRange r = detail::cellRange(box, L, info.grid);
+    for (int a = 0; a < 3; ++a) {
+      c.lo[a] = r.lo[a];
+      c.n[a] = static_cast<int>(r.hi[a] - r.lo[a]);
+    }
+    c.corners = kSpans ? detail::subcellSpanCorners(box, L, r, info.grid) : detail::kWholeCellSpan;
+    c.dx = c.dy = c.dz = 0;
+    c.L = L;
+    return;
+  }
+  c.L = info.top_level + 1;
+}
+
+/// The lane's next visit: the entries [begin, begin + count) of the next occupied cell of its
+/// share of the lookups (the cells whose position in the query's walk is `sub` modulo P, a
+/// power of two), or the next chunk of a cut cell, with the cell's `ends` bits (as in
+/// scanCandidatesGroup) and the query's sub-cell span there; count 0 when the lookups are done.
+template <bool kSpans, class S>
+__device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const BuildInfo& info,
+                                                   const WarpQuery& mine, std::uint32_t max_visit,
+                                                   unsigned int P, unsigned int sub,
+                                                   LookupCursor& c, std::uint32_t& begin,
+                                                   unsigned int& ends, std::uint32_t& qspan) {
+  std::uint32_t end = 0;
+  if (c.rest_begin < c.rest_end) {
+    begin = c.rest_begin;
+    end = c.rest_end;
+    ends = c.rest_ends;
+  } else {
+    int cell = -1;
+    while (cell < 0 && c.L <= info.top_level) {
+      const int dx = c.dx, dy = c.dy, dz = c.dz;
+      ends = (dx == 0 ? 1u : 0u) | (dy == 0 ? 2u : 0u) | (dz == 0 ? 4u : 0u) |
+             (dx == c.n[0] ? 8u : 0u) | (dy == c.n[1] ? 16u : 0u) | (dz == c.n[2] ? 32u : 0u);
+      if ((c.pos++ & (P - 1)) == sub)
+        cell = findCell(h, info, c.L, c.lo[0] + dx, c.lo[1] + dy, c.lo[2] + dz);
+      if (cell >= 0 && kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
+      if (++c.dz > c.n[2]) {
+        c.dz = 0;
+        if (++c.dy > c.n[1]) {
+          c.dy = 0;
+          if (++c.dx > c.n[0]) startLevel<kSpans>(c, mine.box, info, c.L + 1);
+        }
+      }
+    }
+    if (cell < 0) return 0;
+    begin = __ldg(h.cell_begin + cell);
+    end = __ldg(h.cell_begin + cell + 1);
+  }
+  const std::uint32_t count = end - begin < max_visit ? end - begin : max_visit;
+  c.rest_begin = begin + count;
+  c.rest_end = end;
+  c.rest_ends = ends;
+  return count;
+}
+
+/// The warp-wide form of scanCandidatesGroup: the same candidates (size rule, box overlap,
+/// canonical cell), for 32 / P queries at once, P = 2^log_p lanes per query (1, 2, 4, ..., 32;
+/// lane l serves the query in slot l / P of q, this warp's slots, written by the lanes and
+/// synchronised by the caller). The P lanes of a query share its lookups (each probes every P-th cell of the
+/// walk; no lane repeats another's); at each step every lane contributes the entries of its next
+/// occupied cell, and the warp tests all of them together, 32 entries per round, whatever cell and
+/// query each belongs to. So no lane idles at the end of a cell, at the price of the size rule's
+/// early exit: an entry smaller than its query is rejected by accept() after its diameter is
+/// loaded instead of ending the cell. A larger P gives a small query set more warps.
+/// accept(q_owner, j, d_j) and emit(q_owner, j) get the slot of the query that the entry is tested
+/// against. max_visit: 1..kMaxWarpVisit. Every lane of the warp must call, with warp-uniform
+/// arguments.
+template <bool kSpans, class S, class Accept, class Emit>
+__device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
+                                                   const WarpQuery* q, unsigned int log_p,
+                                                   std::uint32_t max_visit, Accept&& accept,
+                                                   Emit&& emit) {
+  constexpr unsigned int kFull = 0xFFFFFFFFu;
+  const unsigned int lane = threadIdx.x & 31u;
+  const unsigned int P = 1u << log_p;
+  const unsigned int sub = lane & (P - 1);
+  const WarpQuery& mine = q[lane >> log_p];
+  LookupCursor c;
+  c.rest_begin = c.rest_end = c.rest_ends = 0;
+  c.pos = 0;
+  c.L = info.top_level + 1;
+  if (mine.live) startLevel<kSpans>(c, mine.box, info, detail::levelFor(mine.d, info.grid));
+  while (true) {
+    std::uint32_t begin = 0, qspan = detail::kWholeCellSpan;
+    unsigned int ends = 0;
+    const std::uint32_t count = nextVisit<kSpans>(h, info, mine, max_visit, P, sub, c, begin, ends, qspan);
+    // Inclusive prefix sum of the lanes' counts: lane o owns the warp's entries
+    // [incl_o - count_o, incl_o).
+    std::uint32_t incl = count;
+    for (int o = 1; o < 32; o <<= 1) {
+      const std::uint32_t y = __shfl_up_sync(kFull, incl, o);
+      if (lane >= static_cast<unsigned int>(o)) incl += y;
+    }
+    const std::uint32_t total = __shfl_sync(kFull, incl, 31);
+    if (total == 0) break;  // every lane's lookups are done
+    for (std::uint32_t base = 0; base < total; base += 32) {
+      const std::uint32_t t = base + lane;
+      // The owner of entry t: the first lane whose inclusive sum exceeds t.
+      int owner = 0;
+      for (int step = 16; step > 0; step >>= 1)
+        if (__shfl_sync(kFull, incl, owner + step - 1) <= t) owner += step;
+      const std::uint32_t o_first =
+          __shfl_sync(kFull, incl, owner) - __shfl_sync(kFull, count, owner);
+      const std::uint32_t o_begin = __shfl_sync(kFull, begin, owner);
+      const unsigned int o_ends = __shfl_sync(kFull, ends, owner);
+      const std::uint32_t o_qspan = kSpans ? __shfl_sync(kFull, qspan, owner) : 0u;
+      if (t < total) {
+        const std::uint32_t k = o_begin + (t - o_first);
+        const std::uint32_t v = __ldg(h.entry_tri + k);
+        const std::uint32_t espan = kSpans ? __ldg(h.entry_span + k) : 0u;
+        // The canonical-cell test of scanCandidatesGroup, from the entry's first-cell bits.
+        if (((v >> 29) | o_ends | 0x38u) == 0x3Fu &&
+            (!kSpans || detail::subcellSpansOverlap(espan, o_qspan))) {
+          const std::uint32_t j = v & kEntryTriMask;
+          const double dj = __ldg(h.diam + j);
+          const WarpQuery& oq = q[owner >> log_p];
+          if (accept(oq, j, dj) && detail::boxesOverlap(oq.box, boxOf(h, j))) emit(oq, j);
+        }
+      }
+    }
+  }
+}
+
 #endif  // __CUDACC__
 
 }  // namespace cuda

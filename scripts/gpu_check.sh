@@ -150,7 +150,7 @@ grep -E "tests passed|tests failed|The following tests" "$OUT/ctest.log" || true
 san_rc=0
 if [[ "${SANITIZER:-0}" == 1 ]]; then
   SAN="$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)"
-  filter='CudaQueryTyped/*.ClothOverSphereAndSelf:CudaQuery.OutputOverflowGrowsAndReruns:CudaQuery.HugeSizeRatioUsesFull128BitKeys'
+  filter='CudaQueryTyped/*.ClothOverSphereAndSelf:CudaQuery.OutputOverflowGrowsAndReruns:CudaQuery.HugeSizeRatioUsesFull128BitKeys:CudaQuery.WarpAndTileScansFindTheSameCandidatesAndPairs'
   for tool in memcheck racecheck; do
     log "compute-sanitizer --tool $tool (log: $OUT/sanitizer-$tool.log)"
     "$SAN" --tool "$tool" --error-exitcode 3 "$BUILD_DIR/tests/test_cuda_query" \

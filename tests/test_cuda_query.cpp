@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <random>
 #include <string>
@@ -477,6 +478,104 @@ TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
   EXPECT_LT(d_sphere, 4.0);
   EXPECT_GE(auto_on, 2);    // both ways of the rule ran
   EXPECT_GE(auto_off, 2);
+#endif
+}
+
+TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
+  // Phase 1 runs the warp-wide scan (default) or the tile scan (KDET_FCL_CUDA_SCAN=tile). Both
+  // apply the same rules, so every query must give the same candidate count in every mode and the
+  // CPU's pairs: with and without sub-cell spans, with 1, 2, 4, 8 and 32 lanes per query in the
+  // warp scan (KDET_FCL_CUDA_WARP_LANES; by default 1 to 8, by the number of queries and their
+  // density), and with
+  // its cells cut into visits of 1 and 3 entries (KDET_FCL_CUDA_WARP_VISIT). Scenes: a stack of 60 crossing sheets (cells
+  // of hundreds of entries, more than one warp round per cell), a random soup of many sizes (many
+  // levels), a mesh of fewer than 32 triangles (one partial warp), a triangle count that is no
+  // multiple of 32, and inter queries under a pose (A's and B's triangles as queries).
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  TriangleMesh<float> stack;  // sheet l: z = (y - 0.53) * 0.02 * (l - 30), crossing at y = 0.53
+  const int n = 8;
+  for (int l = 0; l < 60; ++l)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        auto P = [&](int a, int b) {
+          const float x = float(i + a) / n, y = float(j + b) / n;
+          return Vec3<float>{x, y, (y - 0.53f) * 0.02f * float(l - 30)};
+        };
+        stack.addTriangle(P(0, 0), P(1, 0), P(0, 1));
+        stack.addTriangle(P(1, 0), P(1, 1), P(0, 1));
+      }
+  TriangleMesh<float> small = makeSphere<float>({0.5f, 0.5f, 0.f}, 0.2f, 4, 3);
+  const std::size_t small_n = small.triangles.size();
+  {
+    const TriangleMesh<float> other = makeSphere<float>({0.6f, 0.5f, 0.f}, 0.2f, 3, 3);
+    const auto off = std::uint32_t(small.vertices.size());
+    small.vertices.insert(small.vertices.end(), other.vertices.begin(), other.vertices.end());
+    for (auto t : other.triangles) small.triangles.push_back({t[0] + off, t[1] + off, t[2] + off});
+  }
+  ASSERT_LT(small.triangles.size(), 32u);
+  ASSERT_GT(small.triangles.size(), small_n);
+  HashedMesh<float> sheets(stack), soup(makeRandomSoup<float>(3001, 1.0, 1e-3, 0.2, 5)),
+      tiny(small), ball(makeSphere<float>({0.f, 0.f, 0.f}, 0.3f, 48, 24));
+  ASSERT_NE(soup.numTriangles() % 32, 0u);
+  std::mt19937_64 rng(17);
+  Transform<float> pose = kdet_test::randomPose<float>(rng, 0, 0);  // a rotation about the centre
+  pose.t = {0.5f, 0.5f, 0.f};
+  ball.setPose(pose);
+  struct Query {
+    std::string what;
+    std::function<QueryResult(const QueryOptions&)> run;
+    std::vector<TrianglePair> cpu;
+    long long candidates = -1;  // of the first mode
+  };
+  std::vector<Query> queries = {
+      {"sheets self", [&](const QueryOptions& o) { return intersectSelf(sheets, o); }, {}},
+      {"soup self", [&](const QueryOptions& o) { return intersectSelf(soup, o); }, {}},
+      {"tiny self", [&](const QueryOptions& o) { return intersectSelf(tiny, o); }, {}},
+      {"sheets vs ball", [&](const QueryOptions& o) { return intersectMeshes(sheets, ball, o); }, {}},
+      {"ball vs soup", [&](const QueryOptions& o) { return intersectMeshes(ball, soup, o); }, {}},
+      {"soup vs sheets", [&](const QueryOptions& o) { return intersectMeshes(soup, sheets, o); }, {}},
+  };
+  for (auto& q : queries) q.cpu = sorted(q.run(on(Backend::Cpu)).pairs);
+  EXPECT_GT(queries[0].cpu.size(), 10000u);
+  EXPECT_GT(queries[1].cpu.size(), 50u);
+  EXPECT_GT(queries[2].cpu.size(), 0u);
+  for (int k = 3; k < 6; ++k) EXPECT_GT(queries[k].cpu.size(), 10u) << queries[k].what;
+  struct Mode {
+    const char* scan;
+    const char* spans;
+    const char* lanes;
+    const char* visit;
+  };
+  cuda::setProfiling(true);
+  for (const Mode m :
+       {Mode{"tile", "0", nullptr, nullptr}, Mode{"warp", "0", "1", nullptr},
+        Mode{"warp", "1", "2", nullptr}, Mode{"tile", "1", nullptr, nullptr},
+        Mode{"warp", "0", "4", "3"}, Mode{"warp", "1", "8", "1"}, Mode{"warp", "0", "32", "3"},
+        Mode{"warp", "1", "1", "1"}, Mode{nullptr, "0", nullptr, nullptr}}) {
+    kdet_test::ScopedEnv scan("KDET_FCL_CUDA_SCAN", m.scan), spans("KDET_FCL_CUDA_SPANS", m.spans),
+        lanes("KDET_FCL_CUDA_WARP_LANES", m.lanes), visit("KDET_FCL_CUDA_WARP_VISIT", m.visit);
+    const bool warp = m.scan == nullptr || std::string(m.scan) == "warp";
+    const std::string mode = std::string(m.scan ? m.scan : "default") + ", spans " + m.spans +
+                             ", lanes " + (m.lanes ? m.lanes : "-") + ", visit " +
+                             (m.visit ? m.visit : "-");
+    for (auto& q : queries) {
+      const QueryResult gpu = q.run(on(Backend::Cuda));
+      const cuda::QueryProfile p = cuda::lastQueryProfile();
+      EXPECT_EQ(gpu.pairs, q.cpu) << q.what << " (" << mode << ")";
+      EXPECT_EQ(p.warp_scan, warp) << mode;
+      if (!warp) EXPECT_EQ(p.warp_lanes, 0) << mode;
+      if (warp && m.lanes) EXPECT_EQ(p.warp_lanes, std::atoi(m.lanes)) << mode;
+      // By default the small query sets of this test get 8 lanes per query (they are far from
+      // filling the device with one).
+      if (warp && !m.lanes) EXPECT_EQ(p.warp_lanes, 8) << mode;
+      EXPECT_EQ(p.spans, *m.spans == '1') << mode;
+      if (q.candidates < 0) q.candidates = static_cast<long long>(p.candidates);
+      EXPECT_EQ(static_cast<long long>(p.candidates), q.candidates) << q.what << " (" << mode << ")";
+    }
+  }
+  cuda::setProfiling(false);
+  EXPECT_GT(queries[0].candidates, 100000);  // the stack's cells are crowded
 #endif
 }
 
