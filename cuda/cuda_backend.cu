@@ -9,15 +9,16 @@
 // -> run heads -> scan -> [first build only: read back the cell count] -> cells (one key per
 // cell) + open-addressing table sized by cells. A re-hash reads nothing back (rebuild()).
 // Per query: relative pose (host, as on the CPU) -> A's vertices mapped into B's frame ->
-// phase 1, a tile of G lanes per query triangle: cells of its level and every coarser one, size
-// rule (with early exit), box overlap, canonical cell -> candidate pairs -> plane filter (Exact
-// predicate only; one thread per candidate, drops pairs that the exact test's first rejection
-// provably rejects, keeps the rest) -> phase 2, one thread per surviving candidate: the exact
-// test -> pairs appended with warp-aggregated atomics -> [host read-back of the counts, and of
-// the BuildInfo of meshes re-hashed in this query; on overflow grow and rerun, on a re-hash that
-// did not fit rebuild it with read-backs and rerun] -> radix sort of the pairs -> device->host
-// copy. The meshes' grids reach the candidate kernel through constant memory (c_info), copied
-// device to device, so the host never needs a re-hash's grid.
+// phase 1, the warp-wide scan (P lanes per query triangle, the warp testing the entries of its
+// 32 / P queries' cells together; KDET_FCL_CUDA_SCAN=tile: the older tile of G lanes per query):
+// cells of its level and every coarser one, size rule, box overlap, canonical cell -> candidate
+// pairs -> plane filter (Exact predicate only; one thread per candidate, drops pairs that the
+// exact test's first rejection provably rejects, keeps the rest) -> phase 2, one thread per
+// surviving candidate: the exact test -> pairs appended with warp-aggregated atomics -> [host
+// read-back of the counts, and of the BuildInfo of meshes re-hashed in this query; on overflow
+// grow and rerun, on a re-hash that did not fit rebuild it with read-backs and rerun] -> radix
+// sort of the pairs -> device->host copy. The meshes' grids reach the candidate kernel through
+// constant memory (c_info), copied device to device, so the host never needs a re-hash's grid.
 // Memory: the build's sort and count scratch is carved out of the query buffers (candidates,
 // pairs, sorted pairs), which are idle during a build; the filter's survivors use the sorted-pair
 // buffer, idle until the final sort.
@@ -452,6 +453,27 @@ __device__ __forceinline__ bool adjacentTriangles(const HashView<S>& M, std::uin
   return adjacent;
 }
 
+/// The query box of B's triangle j in A's frame: its own box when the frames coincide, else the
+/// box of its vertices mapped back into A's frame, grown by a conservative bound on the rounding
+/// of that mapping (from both meshes' bounds, which live on the device: cInfo(0) and cInfo(1)).
+template <class S>
+__device__ __forceinline__ Aabb<double> boxInA(const HashView<S>& B, std::uint32_t j,
+                                               bool identity, const Transform<double>& b_to_a,
+                                               double eps_coef, double eps_tmag) {
+  if (identity) return boxOf(B, j);
+  Vec3<double> p[3];
+  for (int k = 0; k < 3; ++k) {
+    const Vec3<S> w = B.v[B.t[3 * j + k]];
+    p[k] = b_to_a.apply(Vec3<double>{double(w.x), double(w.y), double(w.z)});
+  }
+  double mag = eps_tmag;
+  for (int k = 0; k < 3; ++k)
+    mag += fmax(fabs(cInfo(0).bounds.lo[k]), fabs(cInfo(0).bounds.hi[k])) +
+           fmax(fabs(cInfo(1).bounds.lo[k]), fabs(cInfo(1).bounds.hi[k]));
+  const double eps = eps_coef * mag + 2.2250738585072014e-308;
+  return detail::inflate(detail::triangleBox<double>(p[0], p[1], p[2]), eps);
+}
+
 /// Phase 1 of an inter-object query: candidate pairs (i of A, j of B) that pass the size rule,
 /// the box test and the canonical-cell test, appended to `cand` as (i << 32) | j. Threads
 /// [0, na): A's triangle i against B's triangles with d_j >= d_i (looked up in B's frame with A's
@@ -481,24 +503,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     const std::uint32_t j = idx - na;
     const double dj = B.diam[j];
     if (dj >= cInfo(0).d_max) return;  // nothing in A is strictly larger
-    Aabb<double> q;
-    if (identity) {
-      q = boxOf(B, j);
-    } else {
-      Vec3<double> p[3];
-      for (int k = 0; k < 3; ++k) {
-        const Vec3<S> w = B.v[B.t[3 * j + k]];
-        p[k] = b_to_a.apply(Vec3<double>{double(w.x), double(w.y), double(w.z)});
-      }
-      // The bound on the rounding of B's box mapped back into A's frame (a conservative bound,
-      // from both meshes' bounds, which live on the device).
-      double mag = eps_tmag;
-      for (int k = 0; k < 3; ++k)
-        mag += fmax(fabs(cInfo(0).bounds.lo[k]), fabs(cInfo(0).bounds.hi[k])) +
-               fmax(fabs(cInfo(1).bounds.lo[k]), fabs(cInfo(1).bounds.hi[k]));
-      const double eps = eps_coef * mag + 2.2250738585072014e-308;
-      q = detail::inflate(detail::triangleBox<double>(p[0], p[1], p[2]), eps);
-    }
+    const Aabb<double> q = boxInA(B, j, identity, b_to_a, eps_coef, eps_tmag);
     scanCandidatesGroup<kSpans>(
         A, cInfo(0), q, dj, tile, [&](std::uint32_t, double di) { return di > dj; },
         [&](std::uint32_t i) { emitPair(cand, i, j); });
@@ -588,22 +593,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                                         va[A.t[3 * idx + 2]]);
     } else {
       mine.d = B.diam[idx];
-      if (identity) {
-        box = boxOf(B, idx);
-      } else {
-        Vec3<double> p[3];
-        for (int k = 0; k < 3; ++k) {
-          const Vec3<S> w = B.v[B.t[3 * idx + k]];
-          p[k] = b_to_a.apply(Vec3<double>{double(w.x), double(w.y), double(w.z)});
-        }
-        // As in interCandidatesKernel: B's box mapped back, grown by the rounding bound.
-        double mag = eps_tmag;
-        for (int k = 0; k < 3; ++k)
-          mag += fmax(fabs(cInfo(0).bounds.lo[k]), fabs(cInfo(0).bounds.hi[k])) +
-                 fmax(fabs(cInfo(1).bounds.lo[k]), fabs(cInfo(1).bounds.hi[k]));
-        const double eps = eps_coef * mag + 2.2250738585072014e-308;
-        box = detail::inflate(detail::triangleBox<double>(p[0], p[1], p[2]), eps);
-      }
+      box = boxInA(B, idx, identity, b_to_a, eps_coef, eps_tmag);
     }
     // Nothing in the other mesh is large enough (A: d_j >= d_i; B: d_i > d_j).
     const bool none = a_side ? mine.d > cInfo(1).d_max : mine.d >= cInfo(0).d_max;
@@ -614,11 +604,13 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
   __syncwarp();
   if (a_side)
     scanCandidatesWarp<kSpans>(
-        B, target, q, log_p, max_visit, [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
+        B, target, q, log_p, max_visit,
+        [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
         [&](const WarpQuery& o, std::uint32_t j) { emitPair(cand, o.id, j); });
   else
     scanCandidatesWarp<kSpans>(
-        A, target, q, log_p, max_visit, [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
+        A, target, q, log_p, max_visit,
+        [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
         [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
 }
 
@@ -1536,8 +1528,8 @@ bool spansFor(double density) {
   return density > 4.0;
 }
 
-/// Whether phase 1 runs the warp-wide scan (scanCandidatesWarp: one lane per query triangle, the
-/// warp testing the entries of its 32 queries' cells together) or the tile scan
+/// Whether phase 1 runs the warp-wide scan (scanCandidatesWarp: 1-8 lanes per query triangle, the
+/// warp testing the entries of its 4-32 queries' cells together) or the tile scan
 /// (scanCandidatesGroup: a tile of tileSize() lanes per query triangle):
 /// KDET_FCL_CUDA_SCAN = warp or tile (default warp; read at every query, so tests and benchmarks
 /// can compare the two). Both find the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
@@ -1554,7 +1546,8 @@ bool warpScan() {
 /// and always where cells are crowded. So: 8 lanes when the density exceeds 4; else the fewest
 /// lanes (1, 2, 4, 8) that give at least 4 x 32 lanes per resident warp of the 64-register kernel
 /// (32 warps per SM). Measured on an H100 (benchmarks/RESULTS-gpu.md): the cloth ball and two
-/// frames want 8, the 1M cloth 1, the 250k cloth and the n-body pair 2, the 90k-200k cloths 4.
+/// frames want 8, the 1M cloth 1, the n-body pair and the 200k-250k cloths 2-4, the 90k cloth 4
+/// (the rule gives it 8, 5 % slower than the tile scan there).
 /// KDET_FCL_CUDA_WARP_LANES = 1, 2, 4, 8, 16 or 32 forces it (read at every query).
 unsigned int warpLanesLog2(unsigned long long queries, double density) {
   const char* e = std::getenv("KDET_FCL_CUDA_WARP_LANES");

@@ -358,12 +358,13 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
 /// The warp-wide form of scanCandidatesGroup: the same candidates (size rule, box overlap,
 /// canonical cell), for 32 / P queries at once, P = 2^log_p lanes per query (1, 2, 4, ..., 32;
 /// lane l serves the query in slot l / P of q, this warp's slots, written by the lanes and
-/// synchronised by the caller). The P lanes of a query share its lookups (each probes every P-th cell of the
-/// walk; no lane repeats another's); at each step every lane contributes the entries of its next
-/// occupied cell, and the warp tests all of them together, 32 entries per round, whatever cell and
-/// query each belongs to. So no lane idles at the end of a cell, at the price of the size rule's
-/// early exit: an entry smaller than its query is rejected by accept() after its diameter is
-/// loaded instead of ending the cell. A larger P gives a small query set more warps.
+/// synchronised by the caller). The P lanes of a query share its lookups (each probes every
+/// P-th cell of the walk; no lane repeats another's); at each step every lane contributes the
+/// entries of its next occupied cell, and the warp tests all of them together, 32 entries per
+/// round, whatever cell and query each belongs to. So no lane idles at the end of a cell, at the
+/// price of the size rule's early exit: an entry smaller than its query is rejected by accept()
+/// after its diameter is loaded instead of ending the cell. A larger P gives a small query set
+/// more warps.
 /// accept(q_owner, j, d_j) and emit(q_owner, j) get the slot of the query that the entry is tested
 /// against. max_visit: 1..kMaxWarpVisit. Every lane of the warp must call, with warp-uniform
 /// arguments.
@@ -385,7 +386,8 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
   while (true) {
     std::uint32_t begin = 0, qspan = detail::kWholeCellSpan;
     unsigned int ends = 0;
-    const std::uint32_t count = nextVisit<kSpans>(h, info, mine, max_visit, P, sub, c, begin, ends, qspan);
+    const std::uint32_t count =
+        nextVisit<kSpans>(h, info, mine, max_visit, P, sub, c, begin, ends, qspan);
     // Inclusive prefix sum of the lanes' counts: lane o owns the warp's entries
     // [incl_o - count_o, incl_o).
     std::uint32_t incl = count;

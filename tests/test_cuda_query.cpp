@@ -528,13 +528,17 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
     std::vector<TrianglePair> cpu;
     long long candidates = -1;  // of the first mode
   };
+  using Run = std::function<QueryResult(const QueryOptions&)>;
+  auto self = [](const HashedMesh<float>& m) -> Run {
+    return [&m](const QueryOptions& o) { return intersectSelf(m, o); };
+  };
+  auto inter = [](const HashedMesh<float>& a, const HashedMesh<float>& b) -> Run {
+    return [&a, &b](const QueryOptions& o) { return intersectMeshes(a, b, o); };
+  };
   std::vector<Query> queries = {
-      {"sheets self", [&](const QueryOptions& o) { return intersectSelf(sheets, o); }, {}},
-      {"soup self", [&](const QueryOptions& o) { return intersectSelf(soup, o); }, {}},
-      {"tiny self", [&](const QueryOptions& o) { return intersectSelf(tiny, o); }, {}},
-      {"sheets vs ball", [&](const QueryOptions& o) { return intersectMeshes(sheets, ball, o); }, {}},
-      {"ball vs soup", [&](const QueryOptions& o) { return intersectMeshes(ball, soup, o); }, {}},
-      {"soup vs sheets", [&](const QueryOptions& o) { return intersectMeshes(soup, sheets, o); }, {}},
+      {"sheets self", self(sheets), {}},         {"soup self", self(soup), {}},
+      {"tiny self", self(tiny), {}},             {"sheets vs ball", inter(sheets, ball), {}},
+      {"ball vs soup", inter(ball, soup), {}},   {"soup vs sheets", inter(soup, sheets), {}},
   };
   for (auto& q : queries) q.cpu = sorted(q.run(on(Backend::Cpu)).pairs);
   EXPECT_GT(queries[0].cpu.size(), 10000u);
@@ -571,7 +575,8 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
       if (warp && !m.lanes) EXPECT_EQ(p.warp_lanes, 8) << mode;
       EXPECT_EQ(p.spans, *m.spans == '1') << mode;
       if (q.candidates < 0) q.candidates = static_cast<long long>(p.candidates);
-      EXPECT_EQ(static_cast<long long>(p.candidates), q.candidates) << q.what << " (" << mode << ")";
+      EXPECT_EQ(static_cast<long long>(p.candidates), q.candidates)
+          << q.what << " (" << mode << ")";
     }
   }
   cuda::setProfiling(false);
