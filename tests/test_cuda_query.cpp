@@ -486,11 +486,11 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   // apply the same rules, so every query must give the same candidate count in every mode and the
   // CPU's pairs: with and without sub-cell spans, with 1, 2, 4, 8 and 32 lanes per query in the
   // warp scan (KDET_FCL_CUDA_WARP_LANES; by default 1 to 8, by the number of queries and their
-  // density), and with
-  // its cells cut into visits of 1 and 3 entries (KDET_FCL_CUDA_WARP_VISIT). Scenes: a stack of 60 crossing sheets (cells
-  // of hundreds of entries, more than one warp round per cell), a random soup of many sizes (many
-  // levels), a mesh of fewer than 32 triangles (one partial warp), a triangle count that is no
-  // multiple of 32, and inter queries under a pose (A's and B's triangles as queries).
+  // density), and with its cells cut into visits of 1 and 3 entries (KDET_FCL_CUDA_WARP_VISIT).
+  // Scenes: a stack of 60 crossing sheets (cells of hundreds of entries, more than one warp round
+  // per cell), a random soup of many sizes (many levels), a mesh of fewer than 32 triangles (one
+  // partial warp), a triangle count that is no multiple of 32, and inter queries under a pose
+  // (A's and B's triangles as queries).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   TriangleMesh<float> stack;  // sheet l: z = (y - 0.53) * 0.02 * (l - 30), crossing at y = 0.53
@@ -522,13 +522,13 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   Transform<float> pose = kdet_test::randomPose<float>(rng, 0, 0);  // a rotation about the centre
   pose.t = {0.5f, 0.5f, 0.f};
   ball.setPose(pose);
+  using Run = std::function<QueryResult(const QueryOptions&)>;
   struct Query {
     std::string what;
-    std::function<QueryResult(const QueryOptions&)> run;
+    Run run;
     std::vector<TrianglePair> cpu;
     long long candidates = -1;  // of the first mode
   };
-  using Run = std::function<QueryResult(const QueryOptions&)>;
   auto self = [](const HashedMesh<float>& m) -> Run {
     return [&m](const QueryOptions& o) { return intersectSelf(m, o); };
   };
