@@ -548,10 +548,8 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     mine.box = detail::intersectBoxes(boxOf(M, i), cInfo(0).bounds);
     mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
   }
-  if ((lane & ((1u << log_p) - 1)) == 0) q[lane >> log_p] = mine;
-  __syncwarp();
   scanCandidatesWarp<kSpans>(
-      M, cInfo(0), q, log_p, max_visit,
+      M, cInfo(0), q, mine, log_p, max_visit,
       [&](const WarpQuery& o, std::uint32_t j, double dj) {
         return dj > o.d || (dj == o.d && j > o.id);
       },
@@ -600,16 +598,14 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     mine.box = detail::intersectBoxes(box, target.bounds);
     mine.live = (none || detail::isEmpty(mine.box)) ? 0u : 1u;
   }
-  if ((lane & ((1u << log_p) - 1)) == 0) q[lane >> log_p] = mine;
-  __syncwarp();
   if (a_side)
     scanCandidatesWarp<kSpans>(
-        B, target, q, log_p, max_visit,
+        B, target, q, mine, log_p, max_visit,
         [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
         [&](const WarpQuery& o, std::uint32_t j) { emitPair(cand, o.id, j); });
   else
     scanCandidatesWarp<kSpans>(
-        A, target, q, log_p, max_visit,
+        A, target, q, mine, log_p, max_visit,
         [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
         [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
 }

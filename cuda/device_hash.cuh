@@ -189,6 +189,26 @@ __device__ __forceinline__ detail::Aabb<double> boxOf(const HashView<S>& h, std:
   return toDoubleBox(h.box[j]);
 }
 
+/// Per axis, whether the cell at offsets (dx, dy, dz) of a query's cell range with extents
+/// (n0, n1, n2) is the range's first (bits 0..2) and last (bits 3..5).
+__device__ __forceinline__ unsigned int cellEnds(int dx, int dy, int dz, int n0, int n1, int n2) {
+  return (dx == 0 ? 1u : 0u) | (dy == 0 ? 2u : 0u) | (dz == 0 ? 4u : 0u) | (dx == n0 ? 8u : 0u) |
+         (dy == n1 ? 16u : 0u) | (dz == n2 ? 32u : 0u);
+}
+
+/// The load-free part of an entry's test, seen from a query cell with `ends` (cellEnds): the
+/// canonical cell holds the overlap's minimum corner, per axis the later of the two first cells
+/// (cellCoord is monotone), so, this cell lying in both ranges, it is this cell iff on every axis
+/// it is the entry's first cell (its value's top bits) or the query's. kSpans: also the sub-cell
+/// spans (entry's, query's in this cell) must overlap. An entry that fails costs neither its
+/// diameter nor its box.
+template <bool kSpans>
+__device__ __forceinline__ bool entrySeenHere(std::uint32_t v, unsigned int ends,
+                                              std::uint32_t espan, std::uint32_t qspan) {
+  return ((v >> 29) | ends | 0x38u) == 0x3Fu &&
+         (!kSpans || detail::subcellSpansOverlap(espan, qspan));
+}
+
 /// The device twin of cpu::scanCandidates (src/cpu/scan.h), run by a tile of G lanes (a
 /// cooperative-groups tile: 4, 8, 16 or 32) for one query triangle: every triangle j of `h` on
 /// the query's level or a coarser one, in a cell the (clipped) query box covers, accepted by the
@@ -234,10 +254,7 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
           const int c = findCell(h, info, L, r.lo[0] + dx, r.lo[1] + dy, r.lo[2] + dz);
           if (c < 0) continue;  // (the same in every lane)
           const std::uint32_t begin = __ldg(h.cell_begin + c), end = __ldg(h.cell_begin + c + 1);
-          // Per axis, whether this cell is the query's first (bits 0..2) and last (bits 3..5).
-          const unsigned int ends = (dx == 0 ? 1u : 0u) | (dy == 0 ? 2u : 0u) |
-                                    (dz == 0 ? 4u : 0u) | (dx == n[0] ? 8u : 0u) |
-                                    (dy == n[1] ? 16u : 0u) | (dz == n[2] ? 32u : 0u);
+          const unsigned int ends = cellEnds(dx, dy, dz, n[0], n[1], n[2]);
           const std::uint32_t qspan =
               kSpans ? detail::subcellSpanInCell(corners, ends) : detail::kWholeCellSpan;
           for (std::uint32_t base = begin; base < end; base += G) {
@@ -246,12 +263,7 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
             if (k < end) {
               const std::uint32_t v = __ldg(h.entry_tri + k);
               const std::uint32_t espan = kSpans ? __ldg(h.entry_span + k) : 0u;
-              // The canonical cell holds the overlap's minimum corner: per axis the later of the
-              // two first cells (cellCoord is monotone), so, this cell lying in both ranges, it
-              // is this cell iff on every axis it is the entry's first cell or the query's. The
-              // test needs no load, so it comes first: an entry seen from another of the query's
-              // cells costs neither its diameter nor its box.
-              if (((v >> 29) | ends | 0x38u) == 0x3Fu && detail::subcellSpansOverlap(espan, qspan)) {
+              if (entrySeenHere<kSpans>(v, ends, espan, qspan)) {
                 const std::uint32_t j = v & kEntryTriMask;
                 const double dj = __ldg(h.diam + j);
                 smaller = sizeKeyOf(dj) < qkey;
@@ -330,12 +342,13 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
   } else {
     int cell = -1;
     while (cell < 0 && c.L <= info.top_level) {
-      const int dx = c.dx, dy = c.dy, dz = c.dz;
-      ends = (dx == 0 ? 1u : 0u) | (dy == 0 ? 2u : 0u) | (dz == 0 ? 4u : 0u) |
-             (dx == c.n[0] ? 8u : 0u) | (dy == c.n[1] ? 16u : 0u) | (dz == c.n[2] ? 32u : 0u);
-      if ((c.pos++ & (P - 1)) == sub)
-        cell = findCell(h, info, c.L, c.lo[0] + dx, c.lo[1] + dy, c.lo[2] + dz);
-      if (cell >= 0 && kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
+      if ((c.pos++ & (P - 1)) == sub) {
+        cell = findCell(h, info, c.L, c.lo[0] + c.dx, c.lo[1] + c.dy, c.lo[2] + c.dz);
+        if (cell >= 0) {
+          ends = cellEnds(c.dx, c.dy, c.dz, c.n[0], c.n[1], c.n[2]);
+          if (kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
+        }
+      }
       if (++c.dz > c.n[2]) {
         c.dz = 0;
         if (++c.dy > c.n[1]) {
@@ -356,27 +369,29 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
 }
 
 /// The warp-wide form of scanCandidatesGroup: the same candidates (size rule, box overlap,
-/// canonical cell), for 32 / P queries at once, P = 2^log_p lanes per query (1, 2, 4, ..., 32;
-/// lane l serves the query in slot l / P of q, this warp's slots, written by the lanes and
-/// synchronised by the caller). The P lanes of a query share its lookups (each probes every
-/// P-th cell of the walk; no lane repeats another's); at each step every lane contributes the
+/// canonical cell), for 32 / P queries at once, P = 2^log_p lanes per query (1, 2, 4, ..., 32; lane
+/// l serves the query in slot l / P of q, this warp's slots; `query` is the lane's query, which
+/// lanes l with l % P == 0 write there). The P lanes of a query share its lookups (each probes
+/// every P-th cell of the walk; no lane repeats another's); at each step every lane contributes the
 /// entries of its next occupied cell, and the warp tests all of them together, 32 entries per
 /// round, whatever cell and query each belongs to. So no lane idles at the end of a cell, at the
 /// price of the size rule's early exit: an entry smaller than its query is rejected by accept()
-/// after its diameter is loaded instead of ending the cell. A larger P gives a small query set
-/// more warps.
+/// after its diameter is loaded instead of ending the cell. A larger P gives a small query set more
+/// warps.
 /// accept(q_owner, j, d_j) and emit(q_owner, j) get the slot of the query that the entry is tested
 /// against. max_visit: 1..kMaxWarpVisit. Every lane of the warp must call, with warp-uniform
-/// arguments.
+/// arguments except `query`.
 template <bool kSpans, class S, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
-                                                   const WarpQuery* q, unsigned int log_p,
-                                                   std::uint32_t max_visit, Accept&& accept,
-                                                   Emit&& emit) {
+                                                   WarpQuery* q, const WarpQuery& query,
+                                                   unsigned int log_p, std::uint32_t max_visit,
+                                                   Accept&& accept, Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
   const unsigned int P = 1u << log_p;
   const unsigned int sub = lane & (P - 1);
+  if (sub == 0) q[lane >> log_p] = query;
+  __syncwarp();
   const WarpQuery& mine = q[lane >> log_p];
   LookupCursor c;
   c.rest_begin = c.rest_end = c.rest_ends = 0;
@@ -412,9 +427,7 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
         const std::uint32_t k = o_begin + (t - o_first);
         const std::uint32_t v = __ldg(h.entry_tri + k);
         const std::uint32_t espan = kSpans ? __ldg(h.entry_span + k) : 0u;
-        // The canonical-cell test of scanCandidatesGroup, from the entry's first-cell bits.
-        if (((v >> 29) | o_ends | 0x38u) == 0x3Fu &&
-            (!kSpans || detail::subcellSpansOverlap(espan, o_qspan))) {
+        if (entrySeenHere<kSpans>(v, o_ends, espan, o_qspan)) {
           const std::uint32_t j = v & kEntryTriMask;
           const double dj = __ldg(h.diam + j);
           const WarpQuery& oq = q[owner >> log_p];
