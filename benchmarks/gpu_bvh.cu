@@ -689,7 +689,7 @@ std::vector<TrianglePair> runQuery(std::size_t n_hint, int a_bits, Traverse trav
     s.cand_cap = std::max<std::size_t>(s.cand_cap, nc + nc / 4);
     s.pair_cap = std::max<std::size_t>(s.pair_cap, np + np / 4);
   }
-  std::vector<TrianglePair> out(np);
+  std::vector<TrianglePair> out;
   if (np > 0) {
     s.sorted.reserve(np);
     s.unpacked.reserve(np);
@@ -703,10 +703,12 @@ std::vector<TrianglePair> runQuery(std::size_t n_hint, int a_bits, Traverse trav
     unpackKernel<<<blocks(np, 256), 256>>>(std::uint32_t(np), s.sorted.p, s.unpacked.p);
     BVH_LAUNCHED();
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair layout");
-    void* h = s.host_pairs.reserve(np * sizeof(uint2));
-    BVH_TRY(cudaMemcpyAsync(h, s.unpacked.p, np * sizeof(uint2), cudaMemcpyDeviceToHost, 0));
-    BVH_TRY(cudaStreamSynchronize(0));
-    std::memcpy(out.data(), h, np * sizeof(uint2));
+    // The backend's read-back (cuda/staged_upload.h), so both pay the same transfer.
+    auto* h = static_cast<TrianglePair*>(s.host_pairs.reserve(np * sizeof(uint2)));
+    out.reserve(np);
+    BVH_TRY(kdet_fcl::staging::stagedDownload(
+        reinterpret_cast<const TrianglePair*>(s.unpacked.p), np, h, 0,
+        [&](const TrianglePair* first, std::size_t k) { out.insert(out.end(), first, first + k); }));
   }
   g_timer.mark(&g_timer.t.output_ms);
   return out;

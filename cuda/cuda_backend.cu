@@ -1463,13 +1463,15 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                                                          reinterpret_cast<uint2*>(in));
     checkLaunch();
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
-    // Through pinned memory: a pageable device->host copy runs at a fraction of the bus rate.
+    // Through pinned memory (a pageable device->host copy runs at a fraction of the bus rate),
+    // in chunks, each appended to the result as soon as it has arrived (staged_upload.h).
     ctx.readback.reserve(m * sizeof(TrianglePair));
-    CUDA_TRY(cudaMemcpyAsync(ctx.readback.data(), in, m * sizeof(TrianglePair),
-                             cudaMemcpyDeviceToHost, s));
-    CUDA_TRY(cudaStreamSynchronize(s));
-    const auto* staged = static_cast<const TrianglePair*>(ctx.readback.data());
-    res.pairs.assign(staged, staged + m);
+    res.pairs.reserve(m);
+    CUDA_TRY(staging::stagedDownload(reinterpret_cast<const TrianglePair*>(in), m,
+                                     static_cast<TrianglePair*>(ctx.readback.data()), s,
+                                     [&](const TrianglePair* first, std::size_t k) {
+                                       res.pairs.insert(res.pairs.end(), first, first + k);
+                                     }));
   }
   ctx.record(3);
   res.complete = options.max_pairs == 0 || res.pairs.size() < options.max_pairs;

@@ -1,18 +1,27 @@
 #pragma once
-// Host-to-device copy of pageable memory through a pinned staging buffer, shared by the CUDA
-// backend (vertex and triangle uploads) and the suite's GPU BVH baseline
-// (benchmarks/gpu_bvh.cu), so that both pay the same upload.
+// Copies between pageable host memory and the device through a pinned staging buffer, shared by
+// the CUDA backend (vertex and triangle uploads, the pairs' read-back) and the suite's GPU BVH
+// baseline (benchmarks/gpu_bvh.cu), so that both pay the same transfers.
 //
-// One host thread copying into pinned memory runs at about 10 GB/s, and only then can the bus
-// transfer (about 50 GB/s on an H100's PCIe 5) start: a 6.7 MB vertex array took 0.72 ms that
-// way. Here the data go in chunks. Several host threads fill the stage, and each chunk's DMA is
-// enqueued as soon as that chunk is staged, so the transfers overlap the host copies: 0.37 ms for
-// the same array with 8 threads, and 12.1 -> 2.0 ms for 67 MB (benchmarks/RESULTS-gpu.md,
+// Upload. One host thread copying into pinned memory runs at about 10 GB/s, and only then can
+// the bus transfer (about 50 GB/s on an H100's PCIe 5) start: a 6.7 MB vertex array took 0.72 ms
+// that way. Here the data go in chunks. Several host threads fill the stage, and each chunk's DMA
+// is enqueued as soon as that chunk is staged, so the transfers overlap the host copies: 0.37 ms
+// for the same array with 8 threads, and 12.1 -> 2.0 ms for 67 MB (benchmarks/RESULTS-gpu.md,
 // "Vertex upload").
+//
+// Download, the mirror image but on one thread: every chunk's DMA into the stage is enqueued at
+// once, each followed by an event, and the calling thread appends each chunk to the destination
+// as soon as its event has fired, so the copies out of the stage overlap the later transfers and
+// the destination is written once (no zero-filled result to overwrite). The one copy out of the
+// stage is what remains of the read-back's host time. Several host threads were slower at the
+// sizes of a pair list: their start and the zero-fill of a presized std::vector cost more than
+// they saved (benchmarks/RESULTS-gpu.md, "Read-back").
 //
 // Knobs (environment, read at every call, for tests and comparisons):
 // KDET_FCL_CUDA_UPLOAD_THREADS=n (1..64) forces the number of host threads (1: one thread,
-// still chunked); KDET_FCL_CUDA_UPLOAD_CHUNK=b (4096 bytes or more) sets the chunk size.
+// still chunked); KDET_FCL_CUDA_UPLOAD_CHUNK=b (4096 bytes or more) sets the chunk size;
+// KDET_FCL_CUDA_DOWNLOAD_CHUNK=b the same for downloads.
 
 #include <cuda_runtime.h>
 
@@ -34,6 +43,9 @@ constexpr std::size_t kUploadChunk = std::size_t(1) << 20;
 /// At most this many host threads by default (8 were 1.5x faster than 4 at 67 MB, level at
 /// 6.7 MB).
 constexpr int kMaxUploadThreads = 8;
+/// Default chunk of a download: 256 KiB (on the UNC scenes' pair lists, up to 3.6 MB, 64 KiB
+/// chunks were slower and 1 MiB level; benchmarks/RESULTS-gpu.md, "Read-back").
+constexpr std::size_t kDownloadChunk = std::size_t(1) << 18;
 
 /// A positive integer from the environment variable `name` within [lo, hi], else 0.
 inline long long uploadKnob(const char* name, long long lo, long long hi) {
@@ -44,10 +56,18 @@ inline long long uploadKnob(const char* name, long long lo, long long hi) {
   return (end != nullptr && *end == 0 && v >= lo && v <= hi) ? v : 0;
 }
 
+/// Chunk size from the knob `name` (4096 bytes or more), else `fallback`.
+inline std::size_t chunkFrom(const char* name, std::size_t fallback) {
+  const long long v = uploadKnob(name, 4096, 1LL << 32);
+  return v > 0 ? std::size_t(v) : fallback;
+}
+
 /// Chunk size of a staged upload (KDET_FCL_CUDA_UPLOAD_CHUNK, else kUploadChunk).
-inline std::size_t uploadChunk() {
-  const long long v = uploadKnob("KDET_FCL_CUDA_UPLOAD_CHUNK", 4096, 1LL << 32);
-  return v > 0 ? std::size_t(v) : kUploadChunk;
+inline std::size_t uploadChunk() { return chunkFrom("KDET_FCL_CUDA_UPLOAD_CHUNK", kUploadChunk); }
+
+/// Chunk size of a staged download (KDET_FCL_CUDA_DOWNLOAD_CHUNK, else kDownloadChunk).
+inline std::size_t downloadChunk() {
+  return chunkFrom("KDET_FCL_CUDA_DOWNLOAD_CHUNK", kDownloadChunk);
 }
 
 /// Host threads for `chunks` chunks: KDET_FCL_CUDA_UPLOAD_THREADS, else one per chunk up to
@@ -108,6 +128,51 @@ inline cudaError_t stagedUpload(void* dst, const void* src, std::size_t bytes, v
   work();
   for (auto& t : pool) t.join();
   return error;
+}
+
+/// Copies `count` elements from device memory `src` into host memory through the pinned buffer
+/// `stage` (at least `count` elements). What the caller enqueued on stream `s` before (the kernel
+/// that writes `src`) runs first. Every chunk's transfer into the stage is enqueued on `s`, each
+/// followed by an event; then `append(first, n)` is called on the calling thread for each chunk in
+/// order, as soon as its event has fired: the chunk's n elements at `first` (in the stage). A chunk
+/// is a whole number of elements (downloadChunk() bytes rounded down, at least one element).
+/// Returns the first CUDA error, or cudaSuccess; the transfers have run when it returns, also on
+/// an error and when append throws (then its exception propagates). For count 0 no CUDA call is
+/// made and append is not called.
+template <class T, class Append>
+cudaError_t stagedDownload(const T* src, std::size_t count, T* stage, cudaStream_t s,
+                           Append&& append) {
+  if (count == 0) return cudaSuccess;
+  const std::size_t chunk = std::max<std::size_t>(1, downloadChunk() / sizeof(T));
+  const std::size_t chunks = (count + chunk - 1) / chunk;
+  // Destroyed on every way out (a pending event's resources are freed once it has fired), after
+  // the stream has drained, so that nothing leaves while a transfer into the stage is pending.
+  struct Events {
+    cudaStream_t s;
+    std::vector<cudaEvent_t> ev;
+    ~Events() {
+      (void)cudaStreamSynchronize(s);
+      for (cudaEvent_t e : ev) (void)cudaEventDestroy(e);
+    }
+  } events{s, {}};
+  events.ev.reserve(chunks);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const std::size_t off = c * chunk, n = std::min(chunk, count - off);
+    cudaEvent_t e = nullptr;
+    cudaError_t err = cudaEventCreateWithFlags(&e, cudaEventDisableTiming);
+    if (err != cudaSuccess) return err;
+    events.ev.push_back(e);
+    err = cudaMemcpyAsync(stage + off, src + off, n * sizeof(T), cudaMemcpyDeviceToHost, s);
+    if (err == cudaSuccess) err = cudaEventRecord(e, s);
+    if (err != cudaSuccess) return err;
+  }
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const cudaError_t err = cudaEventSynchronize(events.ev[c]);
+    if (err != cudaSuccess) return err;
+    const std::size_t off = c * chunk;
+    append(static_cast<const T*>(stage + off), std::min(chunk, count - off));
+  }
+  return cudaSuccess;
 }
 
 }  // namespace staging

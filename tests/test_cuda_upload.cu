@@ -1,15 +1,19 @@
-// The staged host-to-device upload (cuda/staged_upload.h) that the CUDA backend and the GPU BVH
-// baseline share: every byte arrives, nothing beyond the range is written, whatever the number
-// of host threads and the chunk size; the knobs are parsed and bounded. The copy test skips
+// The staged copies (cuda/staged_upload.h) that the CUDA backend and the GPU BVH baseline share.
+// Upload: every byte arrives, nothing beyond the range is written, whatever the number of host
+// threads and the chunk size. Download: every element arrives, in order, in whole-element chunks,
+// and a throwing consumer leaves cleanly. The knobs are parsed and bounded. The copy tests skip
 // without a device; the knob and empty-range tests need none.
 
 #include <cuda_runtime.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <optional>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -24,6 +28,8 @@ bool haveDevice() {
 }
 
 using kdet_test::ScopedEnv;
+using kdet_fcl::staging::downloadChunk;
+using kdet_fcl::staging::stagedDownload;
 using kdet_fcl::staging::stagedUpload;
 using kdet_fcl::staging::uploadChunk;
 using kdet_fcl::staging::uploadThreads;
@@ -77,19 +83,131 @@ TEST(StagedUpload, ZeroBytesTouchNothing) {
   EXPECT_EQ(stagedUpload(nullptr, nullptr, 0, nullptr, nullptr), cudaSuccess);
 }
 
-TEST(StagedUpload, KnobsAreParsedAndBounded) {
+/// An 8-byte element, as a triangle pair.
+struct Pair8 {
+  std::uint32_t a, b;
+};
+
+/// Downloads `count` elements of `dev` (+ shift) through `stage` and checks that the chunks come
+/// in order, each a whole number of elements at most `chunk_bytes` long, and the values.
+template <class T>
+void checkDownload(const T* dev, const std::vector<T>& src, std::size_t shift, std::size_t count,
+                   T* stage, cudaStream_t s, std::size_t chunk_bytes) {
+  std::vector<T> back;
+  std::size_t calls = 0, out_of_order = 0, too_long = 0;
+  const cudaError_t e =
+      stagedDownload(dev + shift, count, stage, s, [&](const T* first, std::size_t n) {
+        out_of_order += first != stage + back.size();  // chunk c sits at stage + c * chunk
+        too_long += n * sizeof(T) > std::max(chunk_bytes, sizeof(T)) || n == 0;
+        ++calls;
+        back.insert(back.end(), first, first + n);
+      });
+  ASSERT_EQ(e, cudaSuccess);
+  EXPECT_EQ(out_of_order, 0u);
+  EXPECT_EQ(too_long, 0u);
+  const std::size_t per = std::max<std::size_t>(1, chunk_bytes / sizeof(T));
+  EXPECT_EQ(calls, (count + per - 1) / per);
+  ASSERT_EQ(back.size(), count);
+  EXPECT_EQ(std::memcmp(back.data(), src.data() + shift, count * sizeof(T)), 0);
+}
+
+TEST(StagedDownload, EveryElementArrivesInOrderForAnyChunk) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  const std::size_t max_bytes = (std::size_t(3) << 20) + 7;
+  std::mt19937 rng(11);
+  std::vector<unsigned char> bytes(max_bytes + 128);
+  for (auto& b : bytes) b = static_cast<unsigned char>(rng());
+  std::vector<Pair8> pairs(bytes.size() / sizeof(Pair8));
+  std::memcpy(pairs.data(), bytes.data(), pairs.size() * sizeof(Pair8));
+  unsigned char* dev = nullptr;
+  ASSERT_EQ(cudaMalloc(&dev, bytes.size()), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(dev, bytes.data(), bytes.size(), cudaMemcpyHostToDevice), cudaSuccess);
+  void* stage = nullptr;
+  ASSERT_EQ(cudaMallocHost(&stage, bytes.size()), cudaSuccess);
+  cudaStream_t s = nullptr;
+  ASSERT_EQ(cudaStreamCreate(&s), cudaSuccess);
+  int cases = 0;
+  for (const char* chunk : {"4096", "5000", static_cast<const char*>(nullptr)}) {
+    ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", chunk);
+    const std::size_t chunk_bytes = downloadChunk();
+    for (std::size_t n : {std::size_t(1), std::size_t(4095), std::size_t(4096), std::size_t(4097),
+                          std::size_t(3 * 4096 + 5), std::size_t(1) << 20, max_bytes}) {
+      // The source differs per case (an offset into the device data), so a stale stage or a
+      // chunk out of place would be seen.
+      const std::size_t shift = std::size_t(cases++) % 97;
+      SCOPED_TRACE("chunk " + std::string(chunk ? chunk : "default") + ", bytes " +
+                   std::to_string(n) + ", shift " + std::to_string(shift));
+      checkDownload(dev, bytes, shift, n, static_cast<unsigned char*>(stage), s, chunk_bytes);
+      // 8-byte elements: a chunk of 5000 bytes carries 625 whole pairs, never a split one.
+      const std::size_t np = n / sizeof(Pair8) + 1, ps = shift % 13;
+      checkDownload(reinterpret_cast<const Pair8*>(dev), pairs, ps, np,
+                    static_cast<Pair8*>(stage), s, chunk_bytes);
+    }
+  }
+  EXPECT_EQ(cudaStreamDestroy(s), cudaSuccess);
+  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
+  EXPECT_EQ(cudaFree(dev), cudaSuccess);
+}
+
+TEST(StagedDownload, AThrowingConsumerLeavesCleanlyAndTheNextCopyWorks) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  const std::size_t bytes = (std::size_t(1) << 20) + 3;
+  std::vector<unsigned char> src(bytes);
+  for (std::size_t i = 0; i < bytes; ++i) src[i] = static_cast<unsigned char>(i * 7 + 1);
+  unsigned char* dev = nullptr;
+  ASSERT_EQ(cudaMalloc(&dev, bytes), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(dev, src.data(), bytes, cudaMemcpyHostToDevice), cudaSuccess);
+  unsigned char* stage = nullptr;
+  ASSERT_EQ(cudaMallocHost(&stage, bytes), cudaSuccess);
+  ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
+  // The consumer throws in the second chunk (as a vector's growth may): the exception comes
+  // out, after every transfer has run.
+  int calls = 0;
+  EXPECT_THROW(stagedDownload(dev, bytes, stage, nullptr,
+                              [&](const unsigned char*, std::size_t) {
+                                if (++calls == 2) throw std::runtime_error("no memory");
+                              }),
+               std::runtime_error);
+  EXPECT_EQ(calls, 2);
+  EXPECT_EQ(cudaStreamQuery(nullptr), cudaSuccess);  // nothing left in flight
+  // The stage and the stream still serve.
+  std::vector<unsigned char> back;
+  ASSERT_EQ(stagedDownload(dev, bytes, stage, nullptr,
+                           [&](const unsigned char* first, std::size_t n) {
+                             back.insert(back.end(), first, first + n);
+                           }),
+            cudaSuccess);
+  EXPECT_TRUE(back == src);
+  EXPECT_EQ(cudaGetLastError(), cudaSuccess);
+  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
+  EXPECT_EQ(cudaFree(dev), cudaSuccess);
+}
+
+TEST(StagedDownload, ZeroElementsTouchNothing) {
+  // No CUDA call is made for an empty range, so this holds with or without a device.
+  int calls = 0;
+  EXPECT_EQ(stagedDownload(static_cast<const Pair8*>(nullptr), 0, static_cast<Pair8*>(nullptr),
+                           nullptr, [&](const Pair8*, std::size_t) { ++calls; }),
+            cudaSuccess);
+  EXPECT_EQ(calls, 0);
+}
+
+/// A chunk knob: unset or malformed or under 4096 gives the default, "8192" gives 8192.
+void checkChunkKnob(const char* name, std::size_t (*chunk)(), std::size_t fallback) {
   {
-    ScopedEnv c("KDET_FCL_CUDA_UPLOAD_CHUNK", nullptr);
-    EXPECT_EQ(uploadChunk(), kdet_fcl::staging::kUploadChunk);
+    ScopedEnv c(name, nullptr);
+    EXPECT_EQ(chunk(), fallback);
   }
   for (const char* bad : {"", "abc", "100", "4095", "-8192", "8192x"}) {
-    ScopedEnv c("KDET_FCL_CUDA_UPLOAD_CHUNK", bad);
-    EXPECT_EQ(uploadChunk(), kdet_fcl::staging::kUploadChunk) << "'" << bad << "'";
+    ScopedEnv c(name, bad);
+    EXPECT_EQ(chunk(), fallback) << name << "='" << bad << "'";
   }
-  {
-    ScopedEnv c("KDET_FCL_CUDA_UPLOAD_CHUNK", "8192");
-    EXPECT_EQ(uploadChunk(), 8192u);
-  }
+  ScopedEnv c(name, "8192");
+  EXPECT_EQ(chunk(), 8192u);
+}
+
+TEST(StagedUpload, KnobsAreParsedAndBounded) {
+  checkChunkKnob("KDET_FCL_CUDA_UPLOAD_CHUNK", uploadChunk, kdet_fcl::staging::kUploadChunk);
   {
     ScopedEnv t("KDET_FCL_CUDA_UPLOAD_THREADS", "3");
     EXPECT_EQ(uploadThreads(100), 3);
@@ -108,6 +226,16 @@ TEST(StagedUpload, KnobsAreParsedAndBounded) {
     EXPECT_EQ(uploadThreads(1), 1);
     EXPECT_LE(uploadThreads(1000), kdet_fcl::staging::kMaxUploadThreads);
   }
+}
+
+TEST(StagedDownload, TheChunkKnobIsParsedAndBoundedApartFromTheUploads) {
+  checkChunkKnob("KDET_FCL_CUDA_DOWNLOAD_CHUNK", downloadChunk,
+                 kdet_fcl::staging::kDownloadChunk);
+  // Each direction reads its own knob.
+  ScopedEnv uc("KDET_FCL_CUDA_UPLOAD_CHUNK", "8192");
+  ScopedEnv dc("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "12288");
+  EXPECT_EQ(downloadChunk(), 12288u);
+  EXPECT_EQ(uploadChunk(), 8192u);
 }
 
 }  // namespace
