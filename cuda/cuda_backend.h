@@ -37,7 +37,9 @@
 // filter off or on (default: chosen per query, read at every query). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
-// force the thread count and the chunk size (read at every upload).
+// force the thread count and the chunk size (read at every upload). The pairs come back through
+// pinned memory in 256 KiB chunks, each appended to the result as it arrives;
+// KDET_FCL_CUDA_DOWNLOAD_CHUNK=b sets that chunk size (read at every query).
 //
 // Self queries of unchanged meshes: a self query's pairs depend on the geometry, not the pose.
 // A self query that finds the same device geometry as the mesh's previous self query keeps its
