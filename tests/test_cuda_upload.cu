@@ -127,7 +127,7 @@ TEST(StagedDownload, EveryElementArrivesInOrderForAnyChunk) {
   cudaStream_t s = nullptr;
   ASSERT_EQ(cudaStreamCreate(&s), cudaSuccess);
   int cases = 0;
-  for (const char* chunk : {"4096", "5000", static_cast<const char*>(nullptr)}) {
+  for (const char* chunk : {"4096", "5001", static_cast<const char*>(nullptr)}) {
     ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", chunk);
     const std::size_t chunk_bytes = downloadChunk();
     for (std::size_t n : {std::size_t(1), std::size_t(4095), std::size_t(4096), std::size_t(4097),
@@ -138,7 +138,7 @@ TEST(StagedDownload, EveryElementArrivesInOrderForAnyChunk) {
       SCOPED_TRACE("chunk " + std::string(chunk ? chunk : "default") + ", bytes " +
                    std::to_string(n) + ", shift " + std::to_string(shift));
       checkDownload(dev, bytes, shift, n, static_cast<unsigned char*>(stage), s, chunk_bytes);
-      // 8-byte elements: a chunk of 5000 bytes carries 625 whole pairs, never a split one.
+      // 8-byte elements: a chunk of 5001 bytes carries 625 whole pairs, never a split one.
       const std::size_t np = n / sizeof(Pair8) + 1, ps = shift % 13;
       checkDownload(reinterpret_cast<const Pair8*>(dev), pairs, ps, np,
                     static_cast<Pair8*>(stage), s, chunk_bytes);
