@@ -36,6 +36,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <list>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -201,7 +202,8 @@ __device__ __forceinline__ std::uint32_t sizeKey(double d) {
   return static_cast<std::uint32_t>(orderedBits(d) >> 32);
 }
 
-/// Level and number of covered cells of each triangle; counts[n] = 0 closes the scan.
+/// Level and number of covered cells of each triangle; counts[n] = 0 closes the scan. With
+/// size_key, also the keys and ids of the sort by decreasing diameter.
 template <class S>
 __global__ void __launch_bounds__(kBuildBlock)
     countKernel(std::uint32_t n, const Aabb<S>* __restrict__ box, const double* __restrict__ diam,
@@ -219,8 +221,10 @@ __global__ void __launch_bounds__(kBuildBlock)
     const Aabb<double> bd = toDoubleBox(b);
     level[i] = static_cast<std::uint8_t>(l);
     counts[i] = static_cast<std::uint32_t>(detail::cellRange(bd, l, g).count());
-    size_key[i] = ~sizeKey(diam[i]);  // ascending sort = decreasing diameter
-    ids[i] = i;
+    if (size_key != nullptr) {  // (only when the cells are laid out by size)
+      size_key[i] = ~sizeKey(diam[i]);  // ascending sort = decreasing diameter
+      ids[i] = i;
+    }
     atomicOr(&mask, 1ull << l);
   }
   if (i == n) counts[n] = 0;
@@ -242,12 +246,13 @@ __global__ void __launch_bounds__(kBuildBlock)
                unsigned long long* __restrict__ keys, unsigned long long* __restrict__ hi,
                std::uint32_t* __restrict__ vals, std::uint32_t* __restrict__ tri_of,
                std::uint32_t cap, BuildInfo* winfo) {
-  // Triangles are laid out by decreasing diameter (rank r holds triangle by_size[r]); the stable
-  // sort by cell key keeps that order inside each cell.
+  // With by_size, triangles are laid out by decreasing diameter (rank r holds triangle
+  // by_size[r]), else in index order; the stable sort by cell key keeps that order inside each
+  // cell.
   const std::uint32_t rank = blockIdx.x * blockDim.x + threadIdx.x;
   if (rank == 0) winfo->entries = offsets[n];
   if (rank >= n || info->need_sync) return;
-  const std::uint32_t i = by_size[rank];
+  const std::uint32_t i = by_size != nullptr ? by_size[rank] : rank;
   const GridParams g = info->grid;
   const int cb = info->coord_bits;
   const int l = level[i];
@@ -485,7 +490,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     interCandidatesKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
                           std::uint32_t na, std::uint32_t nb, bool identity,
                           Transform<double> b_to_a, double eps_coef, double eps_tmag,
-                          PairSink cand) {
+                          bool a_ordered, bool b_ordered, PairSink cand) {
   // One tile of G lanes per query triangle (tile-uniform index).
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
   const auto idx = static_cast<std::uint32_t>(
@@ -497,7 +502,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     const Aabb<double> q =
         detail::triangleBox<double>(va[A.t[3 * i]], va[A.t[3 * i + 1]], va[A.t[3 * i + 2]]);
     scanCandidatesGroup<kSpans>(
-        B, cInfo(1), q, di, tile, [&](std::uint32_t, double dj) { return dj >= di; },
+        B, cInfo(1), q, di, b_ordered, tile, [&](std::uint32_t, double dj) { return dj >= di; },
         [&](std::uint32_t j) { emitPair(cand, i, j); });
   } else if (idx < na + nb) {
     const std::uint32_t j = idx - na;
@@ -505,7 +510,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     if (dj >= cInfo(0).d_max) return;  // nothing in A is strictly larger
     const Aabb<double> q = boxInA(B, j, identity, b_to_a, eps_coef, eps_tmag);
     scanCandidatesGroup<kSpans>(
-        A, cInfo(0), q, dj, tile, [&](std::uint32_t, double di) { return di > dj; },
+        A, cInfo(0), q, dj, a_ordered, tile, [&](std::uint32_t, double di) { return di > dj; },
         [&](std::uint32_t i) { emitPair(cand, i, j); });
   }
 }
@@ -513,101 +518,137 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
 /// Phase 1 of a self query: triangle i against the triangles j with (d_j, j) > (d_i, i).
 template <class S, int G, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
-    selfCandidatesKernel(HashView<S> M, std::uint32_t n, PairSink cand) {
+    selfCandidatesKernel(HashView<S> M, std::uint32_t n, bool ordered, PairSink cand) {
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
   const auto i = static_cast<std::uint32_t>(
       (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G);
   if (i >= n) return;
   const double di = M.diam[i];
   scanCandidatesGroup<kSpans>(
-      M, cInfo(0), boxOf(M, i), di, tile,
+      M, cInfo(0), boxOf(M, i), di, ordered, tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
         if (!adjacentTriangles(M, i, j)) emitPair(cand, i, j);
       });
 }
 
+/// The next task of a warp-wide candidate kernel: a task is the queries of one warp (32 / P of
+/// them). Lane 0 takes it from the launch's counter and hands it to the warp, so warps that
+/// finish early take more work and no SM idles while another still has a long queue (the grid
+/// is sized to the resident warps: warpScanBlocks). Warp-uniform; every lane must call.
+__device__ __forceinline__ unsigned long long nextWarpTask(unsigned long long* tasks) {
+  unsigned long long t = 0;
+  if ((threadIdx.x & 31u) == 0) t = atomicAdd(tasks, 1ull);
+  return __shfl_sync(0xFFFFFFFFu, t, 0);
+}
+
+/// The first task of a warp: from the counter, or, with tasks == nullptr (one warp per task, the
+/// grid covering them all), the warp's index in the grid.
+__device__ __forceinline__ unsigned long long firstWarpTask(unsigned long long* tasks) {
+  return tasks != nullptr
+             ? nextWarpTask(tasks)
+             : (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) >> 5;
+}
+
+/// Whether the warp-wide candidate kernels of S hashes loop over tasks from a counter. Float only:
+/// the loop's state pushed the double kernels past their 64 registers (stack frames of 24-80
+/// bytes against 0-16; double queries measured 2 % slower), so a double kernel runs one task per
+/// warp, as before (the host passes it no counter).
+template <class S>
+constexpr bool kWarpTaskLoop = std::is_same<S, float>::value;
+
 /// Phase 1 of a self query with the warp-wide scan (scanCandidatesWarp): 2^log_p lanes per query
-/// triangle, the same candidates as selfCandidatesKernel.
+/// triangle, the same candidates as selfCandidatesKernel. Each task is the 32 / 2^log_p queries
+/// starting at task * (32 >> log_p) (firstWarpTask, nextWarpTask).
 template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
-                             std::uint32_t max_visit, PairSink cand) {
+                             std::uint32_t max_visit, PairSink cand,
+                             unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   const std::uint32_t lane = threadIdx.x & 31u;
-  const std::uint32_t warp = (blockIdx.x * blockDim.x + threadIdx.x) >> 5;
-  const std::uint32_t i = (warp << (5 - log_p)) + (lane >> log_p);
-  if (__all_sync(0xFFFFFFFFu, i >= n)) return;  // a warp past the end (warp-uniform)
-  WarpQuery mine;
-  mine.id = i;
-  mine.d = 0;
-  mine.live = 0;
-  if (i < n) {
-    mine.d = M.diam[i];
-    mine.box = detail::intersectBoxes(boxOf(M, i), cInfo(0).bounds);
-    mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
+  const std::uint32_t per_warp = 32u >> log_p;
+  const unsigned long long count = (n + per_warp - 1) / per_warp;
+  for (unsigned long long task = firstWarpTask(kWarpTaskLoop<S> ? tasks : nullptr); task < count;
+       task = nextWarpTask(tasks)) {
+    const std::uint32_t i = static_cast<std::uint32_t>(task) * per_warp + (lane >> log_p);
+    WarpQuery mine;
+    mine.id = i;
+    mine.d = 0;
+    mine.live = 0;
+    if (i < n) {
+      mine.d = M.diam[i];
+      mine.box = detail::intersectBoxes(boxOf(M, i), cInfo(0).bounds);
+      mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
+    }
+    scanCandidatesWarp<kSpans>(
+        M, cInfo(0), q, mine, log_p, max_visit,
+        [&](const WarpQuery& o, std::uint32_t j, double dj) {
+          return dj > o.d || (dj == o.d && j > o.id);
+        },
+        [&](const WarpQuery& o, std::uint32_t j) {
+          if (!adjacentTriangles(M, o.id, j)) emitPair(cand, o.id, j);
+        });
+    if (!kWarpTaskLoop<S> || tasks == nullptr) break;
   }
-  scanCandidatesWarp<kSpans>(
-      M, cInfo(0), q, mine, log_p, max_visit,
-      [&](const WarpQuery& o, std::uint32_t j, double dj) {
-        return dj > o.d || (dj == o.d && j > o.id);
-      },
-      [&](const WarpQuery& o, std::uint32_t j) {
-        if (!adjacentTriangles(M, o.id, j)) emitPair(cand, o.id, j);
-      });
 }
 
 /// Phase 1 of an inter-object query with the warp-wide scan: the same candidates as
 /// interCandidatesKernel, 2^log_p lanes per query triangle. The first wa = ceil(na / (32 >> log_p))
-/// warps query A's triangles in B's hash, the next ones B's triangles in A's hash (so no warp
-/// mixes the two).
+/// tasks query A's triangles in B's hash, the next ones B's triangles in A's hash (so no warp
+/// mixes the two); tasks as in selfCandidatesWarpKernel.
 template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     interCandidatesWarpKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
                               std::uint32_t na, std::uint32_t nb, bool identity,
                               Transform<double> b_to_a, double eps_coef, double eps_tmag,
-                              unsigned int log_p, std::uint32_t max_visit, PairSink cand) {
+                              unsigned int log_p, std::uint32_t max_visit, PairSink cand,
+                              unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
-  const std::uint32_t warp = (blockIdx.x * blockDim.x + threadIdx.x) >> 5;
   const std::uint32_t lane = threadIdx.x & 31u;
   const std::uint32_t per_warp = 32u >> log_p;
-  const std::uint32_t wa = (na + per_warp - 1) / per_warp;
-  const bool a_side = warp < wa;
-  const std::uint32_t idx = (a_side ? warp : warp - wa) * per_warp + (lane >> log_p);
-  const std::uint32_t nq = a_side ? na : nb;
-  if (!a_side && warp - wa >= (nb + per_warp - 1) / per_warp) return;  // past the end (uniform)
-  WarpQuery mine;
-  mine.id = idx;
-  mine.d = 0;
-  mine.live = 0;
-  const BuildInfo& target = cInfo(a_side ? 1 : 0);
-  if (idx < nq) {
-    Aabb<double> box;
-    if (a_side) {
-      mine.d = A.diam[idx];
-      box = detail::triangleBox<double>(va[A.t[3 * idx]], va[A.t[3 * idx + 1]],
-                                        va[A.t[3 * idx + 2]]);
-    } else {
-      mine.d = B.diam[idx];
-      box = boxInA(B, idx, identity, b_to_a, eps_coef, eps_tmag);
+  const unsigned long long wa = (na + per_warp - 1) / per_warp;
+  const unsigned long long count = wa + (nb + per_warp - 1) / per_warp;
+  for (unsigned long long task = firstWarpTask(kWarpTaskLoop<S> ? tasks : nullptr); task < count;
+       task = nextWarpTask(tasks)) {
+    const bool a_side = task < wa;
+    const std::uint32_t idx =
+        static_cast<std::uint32_t>(a_side ? task : task - wa) * per_warp + (lane >> log_p);
+    const std::uint32_t nq = a_side ? na : nb;
+    WarpQuery mine;
+    mine.id = idx;
+    mine.d = 0;
+    mine.live = 0;
+    const BuildInfo& target = cInfo(a_side ? 1 : 0);
+    if (idx < nq) {
+      Aabb<double> box;
+      if (a_side) {
+        mine.d = A.diam[idx];
+        box = detail::triangleBox<double>(va[A.t[3 * idx]], va[A.t[3 * idx + 1]],
+                                          va[A.t[3 * idx + 2]]);
+      } else {
+        mine.d = B.diam[idx];
+        box = boxInA(B, idx, identity, b_to_a, eps_coef, eps_tmag);
+      }
+      // Nothing in the other mesh is large enough (A: d_j >= d_i; B: d_i > d_j).
+      const bool none = a_side ? mine.d > cInfo(1).d_max : mine.d >= cInfo(0).d_max;
+      mine.box = detail::intersectBoxes(box, target.bounds);
+      mine.live = (none || detail::isEmpty(mine.box)) ? 0u : 1u;
     }
-    // Nothing in the other mesh is large enough (A: d_j >= d_i; B: d_i > d_j).
-    const bool none = a_side ? mine.d > cInfo(1).d_max : mine.d >= cInfo(0).d_max;
-    mine.box = detail::intersectBoxes(box, target.bounds);
-    mine.live = (none || detail::isEmpty(mine.box)) ? 0u : 1u;
+    if (a_side)
+      scanCandidatesWarp<kSpans>(
+          B, target, q, mine, log_p, max_visit,
+          [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
+          [&](const WarpQuery& o, std::uint32_t j) { emitPair(cand, o.id, j); });
+    else
+      scanCandidatesWarp<kSpans>(
+          A, target, q, mine, log_p, max_visit,
+          [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
+          [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
+    if (!kWarpTaskLoop<S> || tasks == nullptr) break;
   }
-  if (a_side)
-    scanCandidatesWarp<kSpans>(
-        B, target, q, mine, log_p, max_visit,
-        [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
-        [&](const WarpQuery& o, std::uint32_t j) { emitPair(cand, o.id, j); });
-  else
-    scanCandidatesWarp<kSpans>(
-        A, target, q, mine, log_p, max_visit,
-        [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
-        [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
 }
 
 /// Phase 2: the exact test of each candidate (grid-stride over the device-side count, so the
@@ -776,6 +817,9 @@ struct CachedMesh {
   int key_words = 0;          // 1: compact 64-bit cell keys, 2: 128-bit
   std::uint32_t entry_cap = 0, cell_cap = 0;  // what the entry / cell arrays can hold
   int sort_bits = 0;          // compact keys: the bits the entry sort covers
+  /// Whether each cell lists its triangles by decreasing diameter (the tile scan's early exit
+  /// needs it; the warp scan does not, and a build for it skips the size sort: rebuild()).
+  bool size_ordered = true;
   bool pending = false;       // re-hashed without read-back: check the sizes at the query's
   std::uint32_t pending_entry_cap = 0, pending_cell_cap = 0;  // what that re-hash could store
   BuildInfo info{};           // the host's copy (after a read-back; stale while pending)
@@ -859,7 +903,9 @@ struct Context {
   // The build's sort and count scratch is carved out of cands / pairs / pairs_sorted (rebuild()).
   DeviceBuffer<Vec3<float>> mapped_f;
   DeviceBuffer<Vec3<double>> mapped_d;
-  DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;  // pair_count: 3
+  // pair_count: the candidate, pair and survivor counters, and the task counter of the
+  // warp-wide candidate kernels (warpTasks()); zeroed before every pass.
+  DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;
   PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + pair counts
   PinnedBuffer readback;    // sorted pairs on their way into the result
 
@@ -877,7 +923,7 @@ struct Context {
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
     for (cudaEvent_t& e : ev) CUDA_TRY(cudaEventCreate(&e));
     red.reserve(1);
-    pair_count.reserve(3);
+    pair_count.reserve(4);
     host_small.reserve(3 * sizeof(BuildInfo) + 8 * sizeof(unsigned long long));
     ready = true;
   }
@@ -889,6 +935,7 @@ struct Context {
   }
   unsigned long long* hostCells() { return hostTotal() + 1; }
   unsigned long long* hostCount() { return hostTotal() + 2; }
+  unsigned long long* warpTasks() { return pair_count.data() + 3; }
 
   /// Drops all device memory without throwing (after a CUDA error, or on request): the next
   /// call re-uploads what it needs.
@@ -994,26 +1041,31 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   checkLaunch();
   gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? m.sort_bits : 0);
   checkLaunch();
+  const bool by_size_order = m.size_ordered;
   countKernel<S><<<blocksFor(nt + 1, kBuildBlock), kBuildBlock, 0, s>>>(
-      n, m.box.data(), m.diam.data(), dinfo, m.level.data(), tri_counts, sort_arena,
-      sort_arena + 2 * n4);
+      n, m.box.data(), m.diam.data(), dinfo, m.level.data(), tri_counts,
+      by_size_order ? sort_arena : nullptr, by_size_order ? sort_arena + 2 * n4 : nullptr);
   checkLaunch();
   // Double-buffered sorts (here and below): CUB then needs no temporary copy of the keys and
   // values, only its histograms, which keeps the shared temporary storage small.
   std::uint32_t* by_size = nullptr;
-  {
-    cub::DoubleBuffer<std::uint32_t> sk(sort_arena, sort_arena + n4);
-    cub::DoubleBuffer<std::uint32_t> ids(sort_arena + 2 * n4, sort_arena + 3 * n4);
-    cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-      return cub::DeviceRadixSort::SortPairs(tmp, bytes, sk, ids, static_cast<int>(nt), 0, 32, s);
-    });
-    by_size = ids.Current();
+  if (by_size_order) {
+    {
+      cub::DoubleBuffer<std::uint32_t> sk(sort_arena, sort_arena + n4);
+      cub::DoubleBuffer<std::uint32_t> ids(sort_arena + 2 * n4, sort_arena + 3 * n4);
+      cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
+        return cub::DeviceRadixSort::SortPairs(tmp, bytes, sk, ids, static_cast<int>(nt), 0, 32,
+                                               s);
+      });
+      by_size = ids.Current();
+    }
+    countsBySizeKernel<<<blocksFor(nt + 1, kBuildBlock), kBuildBlock, 0, s>>>(
+        n, tri_counts, by_size, counts);
+    checkLaunch();
   }
-  countsBySizeKernel<<<blocksFor(nt + 1, kBuildBlock), kBuildBlock, 0, s>>>(
-      n, tri_counts, by_size, counts);
-  checkLaunch();
   cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-    return cub::DeviceScan::ExclusiveSum(tmp, bytes, counts, offsets, static_cast<int>(nt + 1), s);
+    return cub::DeviceScan::ExclusiveSum(tmp, bytes, by_size_order ? counts : tri_counts, offsets,
+                                         static_cast<int>(nt + 1), s);
   });
   bool compact = true;
   if (!async) {
@@ -1220,6 +1272,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   const std::uint32_t cap = rehashCap(m.entry_cap), cell_cap = rehashCap(m.cell_cap);
   const std::vector<std::uintptr_t> key = {
       nt, cap, cell_cap, m.slot_count, std::uintptr_t(m.sort_bits), std::uintptr_t(g_num_sms),
+      std::uintptr_t(m.size_ordered),
       std::uintptr_t(ctx.red_ready),
       reinterpret_cast<std::uintptr_t>(m.v.data()), reinterpret_cast<std::uintptr_t>(m.t.data()),
       reinterpret_cast<std::uintptr_t>(m.box.data()),
@@ -1266,6 +1319,8 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   CUDA_TRY(cudaGraphLaunch(m.graph, s));
 }
 
+bool warpScan();
+
 /// Uploads (vertices, and triangles when `upload_tris`) and rebuilds the hierarchy of one mesh on
 /// the device.
 /// - First build, new topology, 128-bit keys, or a failed re-hash: reads back the grid and the
@@ -1299,6 +1354,10 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool u
   m.nv = nv;
   m.nt = nt;
   m.pending = false;
+  // Cells in size order only for the tile scan (its early exit); the warp scan tests every entry
+  // of a cell anyway, so its builds skip the size sort. A tile scan over cells built for the warp
+  // scan tests them all (no early exit): the same candidates.
+  m.size_ordered = !warpScan();
   ++m.builds;             // new geometry: a kept self result is of the old one
   m.kept_self.drop();
   m.dinfo.reserve(1, false);
@@ -1412,7 +1471,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   int passes = 0;
   while (true) {
     ++passes;
-    CUDA_TRY(cudaMemsetAsync(ctx.pair_count.data(), 0, 3 * sizeof(unsigned long long), s));
+    CUDA_TRY(cudaMemsetAsync(ctx.pair_count.data(), 0, 4 * sizeof(unsigned long long), s));
     const bool filtered =
         launch(PairSink{ctx.cands.data(), ctx.pair_count.data(), cand_cap, 32},
                PairSink{ctx.pairs_sorted.data(), ctx.pair_count.data() + 2, surv_cap, 32},
@@ -1568,6 +1627,31 @@ std::uint32_t warpVisit() {
   const char* e = std::getenv("KDET_FCL_CUDA_WARP_VISIT");
   const long v = (e != nullptr && *e) ? std::atol(e) : 0;
   return (v >= 1 && v <= long(kMaxWarpVisit)) ? std::uint32_t(v) : kMaxWarpVisit;
+}
+
+/// Whether the warp-wide candidate kernels take their tasks from a counter, on a grid of the
+/// resident blocks (KDET_FCL_CUDA_WARP_TASKS unset or 1), or run one warp per task on a grid
+/// that covers them all (0). Read at every query, so tests and benchmarks can compare the two.
+/// Both give the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
+bool dynamicWarpTasks() {
+  const char* e = std::getenv("KDET_FCL_CUDA_WARP_TASKS");
+  return !(e != nullptr && *e == '0');
+}
+
+/// Blocks of kQueryBlock threads for a warp-wide candidate kernel with `tasks` warp tasks: all of
+/// them, or (dynamic) no more than the device holds at once, as the occupancy calculator gives
+/// for that kernel (cached per kernel; the context's mutex serialises the callers).
+unsigned int warpScanBlocks(const void* kernel, unsigned long long tasks, bool dynamic) {
+  const unsigned int all = blocksFor(32 * tasks, kQueryBlock);
+  if (!dynamic) return all;
+  static std::map<const void*, int> per_sm;
+  auto it = per_sm.find(kernel);
+  if (it == per_sm.end()) {
+    int b = 0;
+    CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, kQueryBlock, 0));
+    it = per_sm.emplace(kernel, std::max(b, 1)).first;
+  }
+  return std::min<unsigned long long>(all, static_cast<unsigned long long>(it->second) * g_num_sms);
 }
 
 /// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
@@ -1727,6 +1811,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
+    ctx.profile.cells_by_size = A.size_ordered && B.size_ordered;
     bindInfo(s, A, &B);
     if (warp) {
       const unsigned int log_p =
@@ -1737,9 +1822,11 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
           (na + per_warp - 1) / per_warp + (nb + per_warp - 1) / per_warp;
       const auto kernel = spans ? interCandidatesWarpKernel<S, 8, true>
                                 : interCandidatesWarpKernel<S, 8, false>;
-      kernel<<<blocksFor(32 * warps, kQueryBlock), kQueryBlock, 0, s>>>(
-          av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, log_p, warpVisit(),
-          cand);
+      const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
+      ctx.profile.warp_tasks = dynamic;
+      kernel<<<warpScanBlocks(reinterpret_cast<const void*>(kernel), warps, dynamic), kQueryBlock,
+               0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, log_p,
+                       warpVisit(), cand, dynamic ? ctx.warpTasks() : nullptr);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -1747,7 +1834,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
         const auto kernel = spans ? interCandidatesKernel<S, G, MB, true>
                                   : interCandidatesKernel<S, G, MB, false>;
         kernel<<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
-            av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, cand);
+            av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, A.size_ordered,
+            B.size_ordered, cand);
       });
     }
     checkLaunch();
@@ -1797,6 +1885,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   ctx.profile.warp_scan = warp;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
     const HashView<S> mv = M.view();
+    ctx.profile.cells_by_size = M.size_ordered;
     bindInfo<S>(s, M, nullptr);
     if (warp) {
       const auto kernel =
@@ -1804,15 +1893,18 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
       const unsigned int log_p = warpLanesLog2(n, M.self_density);
       ctx.profile.warp_lanes = 1 << log_p;
       const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
-      kernel<<<blocksFor(32 * warps, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, log_p,
-                                                                        warpVisit(), cand);
+      const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
+      ctx.profile.warp_tasks = dynamic;
+      kernel<<<warpScanBlocks(reinterpret_cast<const void*>(kernel), warps, dynamic), kQueryBlock,
+               0, s>>>(mv, un, log_p, warpVisit(), cand, dynamic ? ctx.warpTasks() : nullptr);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
         constexpr int MB = decltype(mb)::value;
         const auto kernel =
             spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
-        kernel<<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, cand);
+        kernel<<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, M.size_ordered,
+                                                                     cand);
       });
     }
     checkLaunch();

@@ -34,7 +34,13 @@
 // flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell keys everywhere and
 // KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces its fallback); these
 // three are read at every build, for tests. KDET_FCL_CUDA_SPANS=0|1 forces the sub-cell span
-// filter off or on (default: chosen per query, read at every query). Uploads of deformed
+// filter off or on (default: chosen per query, read at every query). KDET_FCL_CUDA_SCAN=tile
+// runs the older per-query tiles instead of the warp-wide candidate search (read at every query;
+// a mesh hashed while it is set lists each cell's triangles by size, which only the tile scan
+// uses, and a build for the warp scan skips that sort); KDET_FCL_CUDA_WARP_LANES=1..32 forces the
+// warp scan's lanes per query, KDET_FCL_CUDA_WARP_VISIT=k cuts its cells into visits of k entries
+// and KDET_FCL_CUDA_WARP_TASKS=0 gives each warp one task instead of a counter to take them from
+// (all read at every query, for tests and comparisons). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
 // force the thread count and the chunk size (read at every upload). The pairs come back through
@@ -97,6 +103,10 @@ struct QueryProfile {
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
   bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)
+  bool warp_tasks = false;  ///< its warps took their queries from a counter (a grid of the
+                            ///< resident warps; KDET_FCL_CUDA_WARP_TASKS=0: one warp per task)
+  bool cells_by_size = false;  ///< the queried meshes' cells list their triangles by decreasing
+                               ///< diameter (built for the tile scan, whose early exit needs it)
   bool self_cached = false;  ///< a self query answered from the kept result of an unchanged mesh
                              ///< (no device work, all times 0; KDET_FCL_CUDA_SELF_CACHE=0: never)
 };

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 #include <utility>
 
 #include "cuda_error.cuh"
@@ -219,13 +220,15 @@ __device__ __forceinline__ bool entrySeenHere(std::uint32_t v, unsigned int ends
 /// tiles suit lightly loaded cells. kSpans: entries whose sub-cell span misses the query's are
 /// skipped before their diameter and box are loaded (a saving where cells are crowded with
 /// near-misses; elsewhere the filter's setup costs more than it saves, so the host chooses:
-/// spansFor() in cuda_backend.cu). All arguments must be tile-uniform; every lane of the tile
-/// must call.
+/// spansFor() in cuda_backend.cu). `size_ordered`: the cells of `h` list their triangles by
+/// decreasing diameter, so the scan of a cell ends at its first entry smaller than the query (else
+/// every entry is tested; smaller ones fail the size rule). All arguments must be tile-uniform;
+/// every lane of the tile must call.
 template <bool kSpans, class S, class Tile, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const BuildInfo& info,
                                                     const detail::Aabb<double>& qbox, double dq,
-                                                    const Tile& tile, Accept&& accept,
-                                                    Emit&& emit) {
+                                                    bool size_ordered, const Tile& tile,
+                                                    Accept&& accept, Emit&& emit) {
   constexpr unsigned int G = Tile::num_threads();
   const unsigned int lane = tile.thread_rank();
   // Only the clipped box stays live through the scan: every entry's box lies inside info.bounds
@@ -234,8 +237,9 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
   // max(q.lo, bounds.lo, e.lo) per axis), and twelve fewer registers are held under the cap.
   const detail::Aabb<double> clipped = detail::intersectBoxes(qbox, info.bounds);
   if (detail::isEmpty(clipped)) return;
-  // Cells list their triangles by decreasing sizeKey (cuda_backend.cu); every size rule needs
-  // d_j >= d_query, so the scan of a cell stops at the first entry of a smaller sizeKey.
+  // Cells built in size order list their triangles by decreasing sizeKey (cuda_backend.cu); every
+  // size rule needs d_j >= d_query, so the scan of such a cell stops at the first entry of a
+  // smaller sizeKey.
   const unsigned int qkey = sizeKeyOf(dq);
   for (int L = detail::levelFor(dq, info.grid); L <= info.top_level; ++L) {
     if (!((info.level_mask >> L) & 1ull)) continue;
@@ -271,8 +275,8 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
                   emit(j);
               }
             }
-            // Entries are sorted: once one lane saw a smaller one, all later rounds are smaller.
-            if (tile.any(smaller)) break;
+            // Entries sorted by size: once one lane saw a smaller one, all later rounds are smaller.
+            if (size_ordered && tile.any(smaller)) break;
           }
         }
   }
@@ -282,10 +286,41 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
 /// lane can test entries of every other lane's query.
 struct WarpQuery {
   detail::Aabb<double> box;  ///< the query box clipped to the hash's bounds
+  /// Float hashes only: the clipped box for the entries' box test in float (testBoxOf; set by
+  /// scanCandidatesWarp).
+  detail::Aabb<float> test;
   double d;                  ///< the query triangle's diameter
   std::uint32_t id;          ///< the caller's index of the query triangle
   std::uint32_t live;        ///< 1: the lane has a query (0: idle lane, or an empty clipped box)
 };
+
+/// The query box b as a float box for the test against entry boxes of float coordinates: lo
+/// rounded up and hi rounded down to float. For any float e and any double x, x <= e iff
+/// roundUp(x) <= e (roundUp(x) is the least float not below x), and e <= x iff e <= roundDown(x),
+/// so boxesInFloat(testBoxOf(b), e) decides exactly what detail::boxesOverlap(b, e) decides, in
+/// float comparisons with no conversion of e.
+__device__ __forceinline__ detail::Aabb<float> testBoxOf(const detail::Aabb<double>& b) {
+  return {{__double2float_ru(b.lo.x), __double2float_ru(b.lo.y), __double2float_ru(b.lo.z)},
+          {__double2float_rd(b.hi.x), __double2float_rd(b.hi.y), __double2float_rd(b.hi.z)}};
+}
+
+/// Triangle j's box, its six coordinates loaded at once (three 8-byte loads: an Aabb<float> of 24
+/// bytes is 8-byte aligned in a cudaMalloc'd array), so a test that needs all six waits for one
+/// round trip, not one per coordinate.
+__device__ __forceinline__ detail::Aabb<float> loadBox(const detail::Aabb<float>* p) {
+  static_assert(sizeof(detail::Aabb<float>) == 6 * sizeof(float), "packed box");
+  const float2* f = reinterpret_cast<const float2*>(p);
+  const float2 a = __ldg(f), b = __ldg(f + 1), c = __ldg(f + 2);
+  return {{a.x, a.y, b.x}, {b.y, c.x, c.y}};
+}
+
+/// detail::boxesOverlap of two float boxes, every comparison made (no short circuit: the caller's
+/// loads all issue before the first comparison).
+__device__ __forceinline__ bool boxesInFloat(const detail::Aabb<float>& p,
+                                             const detail::Aabb<float>& q) {
+  return (p.lo.x <= q.hi.x) & (q.lo.x <= p.hi.x) & (p.lo.y <= q.hi.y) & (q.lo.y <= p.hi.y) &
+         (p.lo.z <= q.hi.z) & (q.lo.z <= p.hi.z);
+}
 
 /// A lane's position in its query's lookups: level L (past top_level: done), the level's cell
 /// range as a first cell and extents, the next cell's offsets, and what is left of a cell that
@@ -383,14 +418,20 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
 /// arguments except `query`.
 template <bool kSpans, class S, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
-                                                   WarpQuery* q, const WarpQuery& query,
-                                                   unsigned int log_p, std::uint32_t max_visit,
-                                                   Accept&& accept, Emit&& emit) {
+                                                   WarpQuery* q,
+                                                   const WarpQuery& query, unsigned int log_p,
+                                                   std::uint32_t max_visit, Accept&& accept,
+                                                   Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
   const unsigned int P = 1u << log_p;
   const unsigned int sub = lane & (P - 1);
-  if (sub == 0) q[lane >> log_p] = query;
+  __syncwarp();  // the lanes are done with the slots' previous queries
+  if (sub == 0) {
+    WarpQuery w = query;
+    w.test = std::is_same<S, float>::value ? testBoxOf(query.box) : detail::Aabb<float>{};
+    q[lane >> log_p] = w;
+  }
   __syncwarp();
   const WarpQuery& mine = q[lane >> log_p];
   LookupCursor c;
@@ -431,7 +472,15 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
           const std::uint32_t j = v & kEntryTriMask;
           const double dj = __ldg(h.diam + j);
           const WarpQuery& oq = q[owner >> log_p];
-          if (accept(oq, j, dj) && detail::boxesOverlap(oq.box, boxOf(h, j))) emit(oq, j);
+          if constexpr (std::is_same<S, float>::value) {
+            // The diameter and the box are loaded together and tested without a short circuit:
+            // one round trip per entry (with the short circuit, each coordinate's load waited
+            // for the previous comparison: H100, benchmarks/RESULTS-gpu.md).
+            const detail::Aabb<float> e = loadBox(h.box + j);
+            if (accept(oq, j, dj) & boxesInFloat(oq.test, e)) emit(oq, j);
+          } else {
+            if (accept(oq, j, dj) && detail::boxesOverlap(oq.box, boxOf(h, j))) emit(oq, j);
+          }
         }
       }
     }

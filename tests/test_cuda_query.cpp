@@ -486,7 +486,9 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   // apply the same rules, so every query must give the same candidate count in every mode and the
   // CPU's pairs: with and without sub-cell spans, with 1, 2, 4, 8 and 32 lanes per query in the
   // warp scan (KDET_FCL_CUDA_WARP_LANES; by default 1 to 8, by the number of queries and their
-  // density), and with its cells cut into visits of 1 and 3 entries (KDET_FCL_CUDA_WARP_VISIT).
+  // density), with its cells cut into visits of 1 and 3 entries (KDET_FCL_CUDA_WARP_VISIT), with
+  // its warps' tasks from a counter or one per warp (KDET_FCL_CUDA_WARP_TASKS), and on cells built
+  // for either scan (in size order or not).
   // Scenes: a stack of 60 crossing sheets (cells of hundreds of entries, more than one warp round
   // per cell), a random soup of many sizes (many levels), a mesh of fewer than 32 triangles (one
   // partial warp), a triangle count that is no multiple of 32, and inter queries under a pose
@@ -550,24 +552,42 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
     const char* spans;
     const char* lanes;
     const char* visit;
+    const char* tasks;  // KDET_FCL_CUDA_WARP_TASKS
+    bool rebuild;       // re-hash every mesh under this mode first (cuda::markDeformed)
   };
+  // The cells list their triangles by size only when a mesh was last built under the tile scan
+  // (whose early exit needs that order); the tile scan must also be right on cells built for the
+  // warp scan (the fourth mode), and the warp scan on cells built for the tile scan (the second).
+  bool built_for_tile = true;  // the first mode builds every mesh
   cuda::setProfiling(true);
   for (const Mode m :
-       {Mode{"tile", "0", nullptr, nullptr}, Mode{"warp", "0", "1", nullptr},
-        Mode{"warp", "1", "2", nullptr}, Mode{"tile", "1", nullptr, nullptr},
-        Mode{"warp", "0", "4", "3"}, Mode{"warp", "1", "8", "1"}, Mode{"warp", "0", "32", "3"},
-        Mode{"warp", "1", "1", "1"}, Mode{nullptr, "0", nullptr, nullptr}}) {
+       {Mode{"tile", "0", nullptr, nullptr, nullptr, true},
+        Mode{"warp", "0", "1", nullptr, nullptr, false},
+        Mode{"warp", "1", "2", nullptr, "0", true}, Mode{"tile", "1", nullptr, nullptr, nullptr, false},
+        Mode{"warp", "0", "4", "3", nullptr, false}, Mode{"warp", "1", "8", "1", "0", false},
+        Mode{"warp", "0", "32", "3", "1", false}, Mode{"warp", "1", "1", "1", nullptr, true},
+        Mode{"tile", "0", nullptr, nullptr, nullptr, true},
+        Mode{nullptr, "0", nullptr, nullptr, "0", false}}) {
     kdet_test::ScopedEnv scan("KDET_FCL_CUDA_SCAN", m.scan), spans("KDET_FCL_CUDA_SPANS", m.spans),
-        lanes("KDET_FCL_CUDA_WARP_LANES", m.lanes), visit("KDET_FCL_CUDA_WARP_VISIT", m.visit);
+        lanes("KDET_FCL_CUDA_WARP_LANES", m.lanes), visit("KDET_FCL_CUDA_WARP_VISIT", m.visit),
+        tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks);
     const bool warp = m.scan == nullptr || std::string(m.scan) == "warp";
+    const bool dynamic = m.tasks == nullptr || *m.tasks != '0';
+    if (m.rebuild) {
+      for (const HashedMesh<float>* h : {&sheets, &soup, &tiny, &ball}) cuda::markDeformed(*h);
+      built_for_tile = !warp;
+    }
     const std::string mode = std::string(m.scan ? m.scan : "default") + ", spans " + m.spans +
                              ", lanes " + (m.lanes ? m.lanes : "-") + ", visit " +
-                             (m.visit ? m.visit : "-");
+                             (m.visit ? m.visit : "-") + ", tasks " + (m.tasks ? m.tasks : "-") +
+                             (m.rebuild ? ", rebuilt" : "");
     for (auto& q : queries) {
       const QueryResult gpu = q.run(on(Backend::Cuda));
       const cuda::QueryProfile p = cuda::lastQueryProfile();
       EXPECT_EQ(gpu.pairs, q.cpu) << q.what << " (" << mode << ")";
       EXPECT_EQ(p.warp_scan, warp) << mode;
+      EXPECT_EQ(p.warp_tasks, warp && dynamic) << mode;
+      EXPECT_EQ(p.cells_by_size, built_for_tile) << q.what << " (" << mode << ")";
       if (!warp) EXPECT_EQ(p.warp_lanes, 0) << mode;
       if (warp && m.lanes) EXPECT_EQ(p.warp_lanes, std::atoi(m.lanes)) << mode;
       // By default the small query sets of this test get 8 lanes per query (they are far from
