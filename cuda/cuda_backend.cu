@@ -542,24 +542,32 @@ __device__ __forceinline__ unsigned long long nextWarpTask(unsigned long long* t
   return __shfl_sync(0xFFFFFFFFu, t, 0);
 }
 
-/// The first task of a warp: from the counter, or, with tasks == nullptr (one warp per task, the
-/// grid covering them all), the warp's index in the grid.
-__device__ __forceinline__ unsigned long long firstWarpTask(unsigned long long* tasks) {
-  return tasks != nullptr
-             ? nextWarpTask(tasks)
-             : (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) >> 5;
-}
-
 /// Whether the warp-wide candidate kernels of S hashes loop over tasks from a counter. Float only:
 /// the loop's state pushed the double kernels past their 64 registers (stack frames of 24-80
 /// bytes against 0-16; double queries measured 2 % slower), so a double kernel runs one task per
-/// warp, as before (the host passes it no counter).
+/// warp, as before (the host passes it no counter: warpScanLaunch).
 template <class S>
 constexpr bool kWarpTaskLoop = std::is_same<S, float>::value;
 
+/// Calls run(task) for each task of [0, count) that this warp takes: from the counter `tasks`
+/// until they run out, or, with tasks == nullptr (one warp per task, the grid covering them all),
+/// the one task of the warp's index in the grid. Warp-uniform; every lane must call.
+template <class S, class Run>
+__device__ __forceinline__ void forEachWarpTask(unsigned long long* tasks,
+                                                unsigned long long count, Run&& run) {
+  const bool loop = kWarpTaskLoop<S> && tasks != nullptr;
+  unsigned long long task =
+      loop ? nextWarpTask(tasks)
+           : (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) >> 5;
+  for (; task < count; task = nextWarpTask(tasks)) {
+    run(task);
+    if (!loop) break;
+  }
+}
+
 /// Phase 1 of a self query with the warp-wide scan (scanCandidatesWarp): 2^log_p lanes per query
 /// triangle, the same candidates as selfCandidatesKernel. Each task is the 32 / 2^log_p queries
-/// starting at task * (32 >> log_p) (firstWarpTask, nextWarpTask).
+/// starting at task * (32 >> log_p) (forEachWarpTask).
 template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
@@ -570,8 +578,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
   const std::uint32_t lane = threadIdx.x & 31u;
   const std::uint32_t per_warp = 32u >> log_p;
   const unsigned long long count = (n + per_warp - 1) / per_warp;
-  for (unsigned long long task = firstWarpTask(kWarpTaskLoop<S> ? tasks : nullptr); task < count;
-       task = nextWarpTask(tasks)) {
+  forEachWarpTask<S>(tasks, count, [&](unsigned long long task) {
     const std::uint32_t i = static_cast<std::uint32_t>(task) * per_warp + (lane >> log_p);
     WarpQuery mine;
     mine.id = i;
@@ -590,8 +597,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
         [&](const WarpQuery& o, std::uint32_t j) {
           if (!adjacentTriangles(M, o.id, j)) emitPair(cand, o.id, j);
         });
-    if (!kWarpTaskLoop<S> || tasks == nullptr) break;
-  }
+  });
 }
 
 /// Phase 1 of an inter-object query with the warp-wide scan: the same candidates as
@@ -611,8 +617,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
   const std::uint32_t per_warp = 32u >> log_p;
   const unsigned long long wa = (na + per_warp - 1) / per_warp;
   const unsigned long long count = wa + (nb + per_warp - 1) / per_warp;
-  for (unsigned long long task = firstWarpTask(kWarpTaskLoop<S> ? tasks : nullptr); task < count;
-       task = nextWarpTask(tasks)) {
+  forEachWarpTask<S>(tasks, count, [&](unsigned long long task) {
     const bool a_side = task < wa;
     const std::uint32_t idx =
         static_cast<std::uint32_t>(a_side ? task : task - wa) * per_warp + (lane >> log_p);
@@ -647,8 +652,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
           A, target, q, mine, log_p, max_visit,
           [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
           [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
-    if (!kWarpTaskLoop<S> || tasks == nullptr) break;
-  }
+  });
 }
 
 /// Phase 2: the exact test of each candidate (grid-stride over the device-side count, so the
@@ -1041,15 +1045,14 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   checkLaunch();
   gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? m.sort_bits : 0);
   checkLaunch();
-  const bool by_size_order = m.size_ordered;
   countKernel<S><<<blocksFor(nt + 1, kBuildBlock), kBuildBlock, 0, s>>>(
       n, m.box.data(), m.diam.data(), dinfo, m.level.data(), tri_counts,
-      by_size_order ? sort_arena : nullptr, by_size_order ? sort_arena + 2 * n4 : nullptr);
+      m.size_ordered ? sort_arena : nullptr, m.size_ordered ? sort_arena + 2 * n4 : nullptr);
   checkLaunch();
   // Double-buffered sorts (here and below): CUB then needs no temporary copy of the keys and
   // values, only its histograms, which keeps the shared temporary storage small.
   std::uint32_t* by_size = nullptr;
-  if (by_size_order) {
+  if (m.size_ordered) {
     {
       cub::DoubleBuffer<std::uint32_t> sk(sort_arena, sort_arena + n4);
       cub::DoubleBuffer<std::uint32_t> ids(sort_arena + 2 * n4, sort_arena + 3 * n4);
@@ -1064,7 +1067,7 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     checkLaunch();
   }
   cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-    return cub::DeviceScan::ExclusiveSum(tmp, bytes, by_size_order ? counts : tri_counts, offsets,
+    return cub::DeviceScan::ExclusiveSum(tmp, bytes, m.size_ordered ? counts : tri_counts, offsets,
                                          static_cast<int>(nt + 1), s);
   });
   bool compact = true;
@@ -1638,20 +1641,32 @@ bool dynamicWarpTasks() {
   return !(e != nullptr && *e == '0');
 }
 
-/// Blocks of kQueryBlock threads for a warp-wide candidate kernel with `tasks` warp tasks: all of
-/// them, or (dynamic) no more than the device holds at once, as the occupancy calculator gives
-/// for that kernel (cached per kernel; the context's mutex serialises the callers).
-unsigned int warpScanBlocks(const void* kernel, unsigned long long tasks, bool dynamic) {
+/// The grid and task counter of a warp-wide candidate kernel with `tasks` warp tasks. With the
+/// counter (kWarpTaskLoop<S> and dynamicWarpTasks()): no more blocks of kQueryBlock threads than
+/// the device holds at once, as the occupancy calculator gives for that kernel (cached per
+/// kernel; the context's mutex serialises the callers). Without: one warp per task, no counter.
+/// Records the choice in the query's profile.
+struct WarpScanLaunch {
+  unsigned int blocks;
+  unsigned long long* tasks;
+};
+template <class S, class Kernel>
+WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long tasks) {
+  const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
+  ctx.profile.warp_tasks = dynamic;
   const unsigned int all = blocksFor(32 * tasks, kQueryBlock);
-  if (!dynamic) return all;
+  if (!dynamic) return {all, nullptr};
   static std::map<const void*, int> per_sm;
-  auto it = per_sm.find(kernel);
+  const void* key = reinterpret_cast<const void*>(kernel);
+  auto it = per_sm.find(key);
   if (it == per_sm.end()) {
     int b = 0;
     CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, kQueryBlock, 0));
-    it = per_sm.emplace(kernel, std::max(b, 1)).first;
+    it = per_sm.emplace(key, std::max(b, 1)).first;
   }
-  return std::min<unsigned long long>(all, static_cast<unsigned long long>(it->second) * g_num_sms);
+  return {static_cast<unsigned int>(std::min<unsigned long long>(
+              all, static_cast<unsigned long long>(it->second) * g_num_sms)),
+          ctx.warpTasks()};
 }
 
 /// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
@@ -1822,11 +1837,10 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
           (na + per_warp - 1) / per_warp + (nb + per_warp - 1) / per_warp;
       const auto kernel = spans ? interCandidatesWarpKernel<S, 8, true>
                                 : interCandidatesWarpKernel<S, 8, false>;
-      const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
-      ctx.profile.warp_tasks = dynamic;
-      kernel<<<warpScanBlocks(reinterpret_cast<const void*>(kernel), warps, dynamic), kQueryBlock,
-               0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, log_p,
-                       warpVisit(), cand, dynamic ? ctx.warpTasks() : nullptr);
+      const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, warps);
+      kernel<<<wl.blocks, kQueryBlock, 0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a,
+                                               eps_coef, eps_tmag, log_p, warpVisit(), cand,
+                                               wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -1893,10 +1907,8 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
       const unsigned int log_p = warpLanesLog2(n, M.self_density);
       ctx.profile.warp_lanes = 1 << log_p;
       const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
-      const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
-      ctx.profile.warp_tasks = dynamic;
-      kernel<<<warpScanBlocks(reinterpret_cast<const void*>(kernel), warps, dynamic), kQueryBlock,
-               0, s>>>(mv, un, log_p, warpVisit(), cand, dynamic ? ctx.warpTasks() : nullptr);
+      const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, warps);
+      kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), cand, wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;

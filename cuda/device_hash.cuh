@@ -275,7 +275,7 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
                   emit(j);
               }
             }
-            // Entries sorted by size: once one lane saw a smaller one, all later rounds are smaller.
+            // Entries by size: once one lane saw a smaller one, all later rounds are smaller.
             if (size_ordered && tile.any(smaller)) break;
           }
         }
