@@ -69,6 +69,7 @@ constexpr int kBuildBlock = 256;
 constexpr int kQueryBlock = 128;
 constexpr int kFilterBlock = 256;
 constexpr std::size_t kMaxCachedMeshes = 32;
+constexpr std::size_t kPairCountWords = 5;  // Context::pair_count
 
 // ---------------------------------------------------------------------------------------------
 // Build kernels
@@ -353,7 +354,8 @@ __global__ void headsKernel(std::uint32_t cap, const BuildInfo* info,
 
 /// One thread per run head: the cell's first entry, its full key (1 word when compact, else
 /// {hi, lo}), and its slot in the table. Cells at or past `cell_cap` are counted
-/// (info->cells) but not stored, so the host can see that the arrays were too small.
+/// (info->cells) but not stored, so the host can see that the arrays were too small. Also, for
+/// every 32nd entry k, the cell that holds it: block_cell[k / 32] (selfCellPairsKernel's tasks).
 template <bool kCompact>
 __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restrict__ key,
                             const unsigned long long* __restrict__ hi,
@@ -361,10 +363,12 @@ __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restr
                             const std::uint32_t* __restrict__ cell_index, BuildInfo* info,
                             std::uint32_t cell_cap, std::uint32_t* __restrict__ cell_begin,
                             unsigned long long* __restrict__ cell_key, unsigned long long* slots,
-                            std::uint32_t slot_count) {
+                            std::uint32_t slot_count, std::uint32_t* __restrict__ block_cell) {
   const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
   const std::uint32_t m = writtenEntries(info, cap);
   if (k >= m) return;
+  // cell_index is the exclusive scan of the heads: entry k lies in cell cell_index[k] + head[k] - 1.
+  if ((k & 31u) == 0) block_cell[k >> 5] = cell_index[k] + head[k] - 1;
   if (k == m - 1) {  // sentinel after the last cell
     const std::uint32_t cells = cell_index[k] + head[k];
     info->cells = cells;
@@ -502,7 +506,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     const Aabb<double> q =
         detail::triangleBox<double>(va[A.t[3 * i]], va[A.t[3 * i + 1]], va[A.t[3 * i + 2]]);
     scanCandidatesGroup<kSpans>(
-        B, cInfo(1), q, di, b_ordered, tile, [&](std::uint32_t, double dj) { return dj >= di; },
+        B, cInfo(1), q, di, b_ordered, 0, tile, [&](std::uint32_t, double dj) { return dj >= di; },
         [&](std::uint32_t j) { emitPair(cand, i, j); });
   } else if (idx < na + nb) {
     const std::uint32_t j = idx - na;
@@ -510,22 +514,25 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     if (dj >= cInfo(0).d_max) return;  // nothing in A is strictly larger
     const Aabb<double> q = boxInA(B, j, identity, b_to_a, eps_coef, eps_tmag);
     scanCandidatesGroup<kSpans>(
-        A, cInfo(0), q, dj, a_ordered, tile, [&](std::uint32_t, double di) { return di > dj; },
+        A, cInfo(0), q, dj, a_ordered, 0, tile, [&](std::uint32_t, double di) { return di > dj; },
         [&](std::uint32_t i) { emitPair(cand, i, j); });
   }
 }
 
-/// Phase 1 of a self query: triangle i against the triangles j with (d_j, j) > (d_i, i).
+/// Phase 1 of a self query: triangle i against the triangles j with (d_j, j) > (d_i, i), on its
+/// own level and every coarser one, or (level_skip = 1, after selfCellPairsKernel) only on the
+/// coarser ones.
 template <class S, int G, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
-    selfCandidatesKernel(HashView<S> M, std::uint32_t n, bool ordered, PairSink cand) {
+    selfCandidatesKernel(HashView<S> M, std::uint32_t n, bool ordered, int level_skip,
+                         PairSink cand) {
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
   const auto i = static_cast<std::uint32_t>(
       (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G);
   if (i >= n) return;
   const double di = M.diam[i];
   scanCandidatesGroup<kSpans>(
-      M, cInfo(0), boxOf(M, i), di, ordered, tile,
+      M, cInfo(0), boxOf(M, i), di, ordered, level_skip, tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
         if (!adjacentTriangles(M, i, j)) emitPair(cand, i, j);
@@ -566,12 +573,12 @@ __device__ __forceinline__ void forEachWarpTask(unsigned long long* tasks,
 }
 
 /// Phase 1 of a self query with the warp-wide scan (scanCandidatesWarp): 2^log_p lanes per query
-/// triangle, the same candidates as selfCandidatesKernel. Each task is the 32 / 2^log_p queries
-/// starting at task * (32 >> log_p) (forEachWarpTask).
+/// triangle, the same candidates as selfCandidatesKernel (level_skip likewise). Each task is the
+/// 32 / 2^log_p queries starting at task * (32 >> log_p) (forEachWarpTask).
 template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
-                             std::uint32_t max_visit, PairSink cand,
+                             std::uint32_t max_visit, int level_skip, PairSink cand,
                              unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
@@ -590,7 +597,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
     }
     scanCandidatesWarp<kSpans>(
-        M, cInfo(0), q, mine, log_p, max_visit,
+        M, cInfo(0), q, mine, log_p, max_visit, level_skip,
         [&](const WarpQuery& o, std::uint32_t j, double dj) {
           return dj > o.d || (dj == o.d && j > o.id);
         },
@@ -598,6 +605,122 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
           if (!adjacentTriangles(M, o.id, j)) emitPair(cand, o.id, j);
         });
   });
+}
+
+/// A triangle's box, its coordinates loaded at once for float (loadBox), plainly for double.
+template <class S>
+__device__ __forceinline__ Aabb<S> loadBoxOf(const Aabb<S>* p) {
+  if constexpr (std::is_same<S, float>::value) return loadBox(p);
+  else return *p;
+}
+
+
+/// Phase 1 of a self query, its pairs of triangles on one level; the query scans then start one
+/// level above each query's own (level_skip = 1). Two triangles of one level meet only in the
+/// cells of that level where both are stored, and a query's cell range on its own level is the
+/// set of cells where its triangle is stored (the build's level, box and cellRange), so the
+/// same-level candidates of the query scans are the pairs of entries of one cell that pass their
+/// rules: the canonical cell (on every axis the first cell of one of the two: their first-cell
+/// bits), the box test and the adjacency rule; the size rule only picks which of the two queries
+/// found the pair. Here each such pair is tested once, from its cell, with no lookup, against
+/// twice (once from each triangle) in the query scans. Emitted as (min, max) of the indices (the
+/// filter and exact kernels do not depend on the order).
+/// A warp task is `rows` (1, 2, 4, 8, 16 or 32: a divisor of 32) consecutive entries (block_cell gives the cell of the entry
+/// 32 * floor(first row / 32)); a task's work is about rows * m / 2 pairs in a cell of m entries,
+/// so crowded cells want few rows per task (short tasks, a short tail of busy warps) and sparse
+/// ones many (less per-task overhead): cellRows(). In a cell of m entries, row a (its position in the cell) pairs with
+/// the h = (m - 1) / 2 entries after it, cyclically, and, when m is even and a < m / 2, also with
+/// a + m / 2: every unordered pair once, and every row about m / 2 partners, so no task holds
+/// the long first rows of a crowded cell. The warp tests the partners of its rows 32 at a time
+/// whatever row they belong to (prefix sum and owner search, as scanCandidatesWarp), each row in
+/// visits of at most max_visit partners. kSpans: a pair whose sub-cell spans in the cell do not
+/// overlap (both entries' spans: subcellSpan is monotone, so boxes that overlap have overlapping
+/// spans) is dropped before the partner's box is loaded. Tasks come from the counter `tasks`; the
+/// grid is the resident blocks. Only the cells this build stored are read (info.cells against
+/// cell_cap; none after need_sync): a re-hash that did not fit reruns the query anyway
+/// (checkPending).
+template <class S, bool kSpans>
+__global__ void __launch_bounds__(kQueryBlock, 8)
+    selfCellPairsKernel(HashView<S> M, const std::uint32_t* __restrict__ block_cell,
+                        std::uint32_t cell_cap, std::uint32_t rows, std::uint32_t max_visit,
+                        PairSink cand, unsigned long long* tasks) {
+  constexpr unsigned int kFull = 0xFFFFFFFFu;
+  __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
+  Aabb<S>* const row_box = row_boxes[threadIdx.x >> 5];
+  const unsigned int lane = threadIdx.x & 31u;
+  const BuildInfo& info = cInfo(0);
+  const std::uint32_t cells = info.need_sync ? 0u : (info.cells < cell_cap ? info.cells : cell_cap);
+  if (cells == 0) return;
+  const std::uint32_t entries = __ldg(M.cell_begin + cells);  // the stored cells' entries
+  const unsigned long long count = (entries + rows - 1ull) / rows;
+  for (unsigned long long task = nextWarpTask(tasks); task < count; task = nextWarpTask(tasks)) {
+    const std::uint32_t first = static_cast<std::uint32_t>(task) * rows;
+    const std::uint32_t k = first + lane;  // the row of lanes < rows
+    // Entries [32 * (first / 32), first + rows) lie in at most 32 consecutive cells from c0
+    // (a cell has at least one entry): lane l holds the end of cell c0 + l, and row k's cell is
+    // c0 plus the number of those ends at or before k.
+    const std::uint32_t c0 = __ldg(block_cell + first / 32);
+    const std::uint32_t cl = c0 + lane + 1;
+    const std::uint32_t cell_end = __ldg(M.cell_begin + (cl < cells ? cl : cells));
+    int o = 0;
+    for (int step = 16; step > 0; step >>= 1)
+      if (__shfl_sync(kFull, cell_end, o + step - 1) <= k) o += step;
+    const std::uint32_t end = __shfl_sync(kFull, cell_end, o);
+    const std::uint32_t prev_end = __shfl_sync(kFull, cell_end, o > 0 ? o - 1 : 0);
+    const std::uint32_t begin = o > 0 ? prev_end : __ldg(M.cell_begin + c0);
+    // Row k's partners: positions [next, stop) of its cyclic list.
+    std::uint32_t next = 0, stop = 0, v = 0, span = 0;
+    __syncwarp();  // the lanes are done with the previous task's row boxes
+    if (lane < rows && k < entries) {
+      const std::uint32_t m = end - begin, a = k - begin;
+      stop = (m - 1) / 2 + ((m % 2 == 0 && a < m / 2) ? 1u : 0u);
+      v = __ldg(M.entry_tri + k);
+      if (kSpans) span = __ldg(M.entry_span + k);
+      row_box[lane] = loadBoxOf(M.box + (v & kEntryTriMask));
+    }
+    __syncwarp();
+    while (true) {
+      const std::uint32_t cnt = stop - next < max_visit ? stop - next : max_visit;
+      std::uint32_t incl = cnt;
+      for (int d = 1; d < 32; d <<= 1) {
+        const std::uint32_t y = __shfl_up_sync(kFull, incl, d);
+        if (lane >= static_cast<unsigned int>(d)) incl += y;
+      }
+      const std::uint32_t total = __shfl_sync(kFull, incl, 31);
+      if (total == 0) break;
+      for (std::uint32_t base = 0; base < total; base += 32) {
+        const std::uint32_t t = base + lane;
+        int owner = 0;
+        for (int step = 16; step > 0; step >>= 1)
+          if (__shfl_sync(kFull, incl, owner + step - 1) <= t) owner += step;
+        const std::uint32_t o_first =
+            __shfl_sync(kFull, incl, owner) - __shfl_sync(kFull, cnt, owner);
+        const std::uint32_t o_next = __shfl_sync(kFull, next, owner);
+        const std::uint32_t o_begin = __shfl_sync(kFull, begin, owner);
+        const std::uint32_t o_end = __shfl_sync(kFull, end, owner);
+        const std::uint32_t o_v = __shfl_sync(kFull, v, owner);
+        const std::uint32_t o_span = kSpans ? __shfl_sync(kFull, span, owner) : 0u;
+        if (t >= total) continue;
+        // The partner at position q of row a's cyclic list.
+        const std::uint32_t m = o_end - o_begin, a = first + owner - o_begin;
+        const std::uint32_t q = o_next + (t - o_first);
+        std::uint32_t bpos = q < (m - 1) / 2 ? a + 1 + q : a + m / 2;
+        if (bpos >= m) bpos -= m;
+        const std::uint32_t b = o_begin + bpos;
+        const std::uint32_t w = __ldg(M.entry_tri + b);
+        // This cell is the pair's canonical cell, and (kSpans) their spans overlap in it.
+        if (((o_v | w) >> 29) != 7u) continue;
+        if (kSpans && !detail::subcellSpansOverlap(o_span, __ldg(M.entry_span + b))) continue;
+        const std::uint32_t i = o_v & kEntryTriMask, j = w & kEntryTriMask;
+        const Aabb<S> e = loadBoxOf(M.box + j);
+        bool overlap;
+        if constexpr (std::is_same<S, float>::value) overlap = boxesInFloat(row_box[owner], e);
+        else overlap = detail::boxesOverlap(row_box[owner], e);
+        if (overlap && !adjacentTriangles(M, i, j)) emitPair(cand, i < j ? i : j, i < j ? j : i);
+      }
+      next += cnt;
+    }
+  }
 }
 
 /// Phase 1 of an inter-object query with the warp-wide scan: the same candidates as
@@ -644,12 +767,12 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     }
     if (a_side)
       scanCandidatesWarp<kSpans>(
-          B, target, q, mine, log_p, max_visit,
+          B, target, q, mine, log_p, max_visit, 0,
           [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
           [&](const WarpQuery& o, std::uint32_t j) { emitPair(cand, o.id, j); });
     else
       scanCandidatesWarp<kSpans>(
-          A, target, q, mine, log_p, max_visit,
+          A, target, q, mine, log_p, max_visit, 0,
           [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
           [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
   });
@@ -813,6 +936,7 @@ struct CachedMesh {
   DeviceBuffer<double> diam;
   DeviceBuffer<std::uint8_t> level;
   DeviceBuffer<std::uint32_t> entry_tri, entry_span, cell_begin;
+  DeviceBuffer<std::uint32_t> block_cell;     // the cell of every 32nd entry (cellsKernel)
   DeviceBuffer<unsigned long long> cell_key;  // key_words per cell
   DeviceBuffer<unsigned long long> slots;
   DeviceBuffer<BuildInfo> dinfo;  // this mesh's grid and sizes, on the device
@@ -865,8 +989,8 @@ struct CachedMesh {
   }
   std::size_t bytes() const {
     return v.bytes() + t.bytes() + box.bytes() + diam.bytes() + level.bytes() +
-           entry_tri.bytes() + entry_span.bytes() + cell_begin.bytes() + cell_key.bytes() +
-           slots.bytes() + dinfo.bytes();
+           entry_tri.bytes() + entry_span.bytes() + cell_begin.bytes() + block_cell.bytes() +
+           cell_key.bytes() + slots.bytes() + dinfo.bytes();
   }
 };
 
@@ -907,10 +1031,11 @@ struct Context {
   // The build's sort and count scratch is carved out of cands / pairs / pairs_sorted (rebuild()).
   DeviceBuffer<Vec3<float>> mapped_f;
   DeviceBuffer<Vec3<double>> mapped_d;
-  // pair_count: the candidate, pair and survivor counters, and the task counter of the
-  // warp-wide candidate kernels (warpTasks()); zeroed before every pass.
+  // pair_count: the candidate, pair and survivor counters, the task counter of the warp-wide
+  // candidate kernels (warpTasks()) and that of the same-level pairs (cellTasks()); zeroed before
+  // every pass.
   DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;
-  PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + pair counts
+  PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + 3 pair counts + cell cands
   PinnedBuffer readback;    // sorted pairs on their way into the result
 
   std::list<CachedMesh<float>> meshes_f;
@@ -927,7 +1052,7 @@ struct Context {
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
     for (cudaEvent_t& e : ev) CUDA_TRY(cudaEventCreate(&e));
     red.reserve(1);
-    pair_count.reserve(4);
+    pair_count.reserve(kPairCountWords);
     host_small.reserve(3 * sizeof(BuildInfo) + 8 * sizeof(unsigned long long));
     ready = true;
   }
@@ -939,7 +1064,9 @@ struct Context {
   }
   unsigned long long* hostCells() { return hostTotal() + 1; }
   unsigned long long* hostCount() { return hostTotal() + 2; }
+  unsigned long long* hostCellCandidates() { return hostTotal() + 5; }
   unsigned long long* warpTasks() { return pair_count.data() + 3; }
+  unsigned long long* cellTasks() { return pair_count.data() + 4; }
 
   /// Drops all device memory without throwing (after a CUDA error, or on request): the next
   /// call re-uploads what it needs.
@@ -1085,6 +1212,7 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     compact = m.info.fits64 != 0 && !envFlag("KDET_FCL_CUDA_FULL_KEYS");
     m.entry_tri.reserve(total);  // 1/8 slack: room for the next re-hash without read-back
     m.entry_span.reserve(m.entry_tri.capacity(), false);
+    m.block_cell.reserve(m.entry_tri.capacity() / 32 + 1, false);
     m.entry_cap = static_cast<std::uint32_t>(std::min<std::size_t>(m.entry_tri.capacity(), 0xF0000000ull));
     m.key_words = compact ? 1 : 2;
     // The compact sort covers whole 8-bit digits (CUB's radix passes): the bits up to the next
@@ -1210,11 +1338,13 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     cellsKernel<true><<<eb, kBuildBlock, 0, s>>>(cap, keys_sorted, nullptr, head, cell_index,
                                                  dinfo, async ? cell_cap : m.cell_cap,
                                                  m.cell_begin.data(), m.cell_key.data(),
-                                                 m.slots.data(), m.slot_count);
+                                                 m.slots.data(), m.slot_count,
+                                                 m.block_cell.data());
   else
     cellsKernel<false><<<eb, kBuildBlock, 0, s>>>(cap, keys_sorted, hi_sorted, head, cell_index,
                                                   dinfo, m.cell_cap, m.cell_begin.data(),
-                                                  m.cell_key.data(), m.slots.data(), m.slot_count);
+                                                  m.cell_key.data(), m.slots.data(), m.slot_count,
+                                                  m.block_cell.data());
   checkLaunch();
   m.pending = async;
   m.pending_entry_cap = cap;
@@ -1284,6 +1414,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
       reinterpret_cast<std::uintptr_t>(m.entry_tri.data()),
       reinterpret_cast<std::uintptr_t>(m.entry_span.data()),
       reinterpret_cast<std::uintptr_t>(m.cell_begin.data()),
+      reinterpret_cast<std::uintptr_t>(m.block_cell.data()),
       reinterpret_cast<std::uintptr_t>(m.cell_key.data()),
       reinterpret_cast<std::uintptr_t>(m.slots.data()),
       reinterpret_cast<std::uintptr_t>(m.dinfo.data()),
@@ -1474,7 +1605,8 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   int passes = 0;
   while (true) {
     ++passes;
-    CUDA_TRY(cudaMemsetAsync(ctx.pair_count.data(), 0, 4 * sizeof(unsigned long long), s));
+    CUDA_TRY(cudaMemsetAsync(ctx.pair_count.data(), 0, kPairCountWords * sizeof(unsigned long long),
+                             s));
     const bool filtered =
         launch(PairSink{ctx.cands.data(), ctx.pair_count.data(), cand_cap, 32},
                PairSink{ctx.pairs_sorted.data(), ctx.pair_count.data() + 2, surv_cap, 32},
@@ -1650,12 +1782,11 @@ struct WarpScanLaunch {
   unsigned int blocks;
   unsigned long long* tasks;
 };
-template <class S, class Kernel>
-WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long tasks) {
-  const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
-  ctx.profile.warp_tasks = dynamic;
-  const unsigned int all = blocksFor(32 * tasks, kQueryBlock);
-  if (!dynamic) return {all, nullptr};
+/// At most `all` blocks of kQueryBlock threads: no more than the device holds at once, as the
+/// occupancy calculator gives for `kernel` (cached per kernel; the context's mutex serialises the
+/// callers).
+template <class Kernel>
+unsigned int residentBlocks(Kernel* kernel, unsigned int all) {
   static std::map<const void*, int> per_sm;
   const void* key = reinterpret_cast<const void*>(kernel);
   auto it = per_sm.find(key);
@@ -1664,9 +1795,43 @@ WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long t
     CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, kQueryBlock, 0));
     it = per_sm.emplace(key, std::max(b, 1)).first;
   }
-  return {static_cast<unsigned int>(std::min<unsigned long long>(
-              all, static_cast<unsigned long long>(it->second) * g_num_sms)),
-          ctx.warpTasks()};
+  return static_cast<unsigned int>(std::min<unsigned long long>(
+      all, static_cast<unsigned long long>(it->second) * g_num_sms));
+}
+
+template <class S, class Kernel>
+WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long tasks) {
+  const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
+  ctx.profile.warp_tasks = dynamic;
+  const unsigned int all = blocksFor(32 * tasks, kQueryBlock);
+  if (!dynamic) return {all, nullptr};
+  return {residentBlocks(kernel, all), ctx.warpTasks()};
+}
+
+/// Whether a self query takes its same-level pairs from the cells (selfCellPairsKernel) and scans
+/// only the coarser levels (KDET_FCL_CUDA_SELF_CELLS unset or 1), or scans every level from each
+/// triangle's own (0). Read at every query, so tests and benchmarks can compare the two. Both give
+/// the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
+bool selfCellPairs() {
+  const char* e = std::getenv("KDET_FCL_CUDA_SELF_CELLS");
+  return !(e != nullptr && *e == '0');
+}
+
+/// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least twice the
+/// resident warps (64 per SM) and the cells are not crowded (the candidates per triangle of the
+/// mesh's last self query, as spansFor, at most 4), else 8. Measured on an H100
+/// (benchmarks/RESULTS-gpu.md): 8 rows took the cloth ball's cell pass from 356 to 159 us (its
+/// 32-row tasks in crowded cells, up to 361 entries, left a tail at 24 % occupancy) and phase 1
+/// of the small scenes down by 4-16 %, but the 1M cloth's cell pass (cells of at most 161) from
+/// 497 to 626 us. KDET_FCL_CUDA_CELL_ROWS = 1, 2, 4, 8, 16 or 32 forces it (read at every query;
+/// a divisor of 32, so that a task's entries lie in the 32 cells from its block_cell).
+std::uint32_t cellRows(std::size_t entries, double density) {
+  const char* e = std::getenv("KDET_FCL_CUDA_CELL_ROWS");
+  const long v = (e != nullptr && *e) ? std::atol(e) : 0;
+  for (long r = 1; r <= 32; r *= 2)
+    if (v == r) return static_cast<std::uint32_t>(v);
+  const std::size_t fill = 2 * 64 * static_cast<std::size_t>(g_num_sms);
+  return density <= 4.0 && entries / 32 >= fill ? 32u : 8u;
 }
 
 /// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
@@ -1895,12 +2060,30 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   const bool filter = usePlaneFilter(options);
   const bool spans = spansFor(M.self_density);
   const bool warp = warpScan();
+  const bool cell_pairs = selfCellPairs();
+  const int level_skip = cell_pairs ? 1 : 0;
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
+  ctx.profile.self_cell_pairs = cell_pairs;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
     const HashView<S> mv = M.view();
     ctx.profile.cells_by_size = M.size_ordered;
     bindInfo<S>(s, M, nullptr);
+    if (cell_pairs) {
+      const auto kernel = spans ? selfCellPairsKernel<S, true> : selfCellPairsKernel<S, false>;
+      // (The entry count of the last build that read it back: an estimate after a re-hash.)
+      const std::uint32_t rows = cellRows(M.info.entries, M.self_density);
+      ctx.profile.cell_rows = static_cast<int>(rows);
+      const unsigned int blocks = residentBlocks(
+          kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
+      kernel<<<blocks, kQueryBlock, 0, s>>>(mv, M.block_cell.data(),
+                                            M.pending ? M.pending_cell_cap : M.cell_cap, rows,
+                                            warpVisit(), cand, ctx.cellTasks());
+      checkLaunch();
+      if (ctx.profiling)  // the candidates so far are the cells' (QueryProfile::cell_candidates)
+        CUDA_TRY(cudaMemcpyAsync(ctx.hostCellCandidates(), cand.count, sizeof(unsigned long long),
+                                 cudaMemcpyDeviceToHost, s));
+    }
     if (warp) {
       const auto kernel =
           spans ? selfCandidatesWarpKernel<S, 8, true> : selfCandidatesWarpKernel<S, 8, false>;
@@ -1908,7 +2091,8 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
       ctx.profile.warp_lanes = 1 << log_p;
       const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
       const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, warps);
-      kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), cand, wl.tasks);
+      kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip, cand,
+                                               wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -1916,7 +2100,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
         const auto kernel =
             spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
         kernel<<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, M.size_ordered,
-                                                                     cand);
+                                                                     level_skip, cand);
       });
     }
     checkLaunch();
@@ -1935,7 +2119,9 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
     return filter;
   };
   PendingBuilds<S> pending{ctx, {&M, nullptr}, {&mesh.mesh(), nullptr}};
+  *ctx.hostCellCandidates() = 0;
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, options);
+  ctx.profile.cell_candidates = *ctx.hostCellCandidates();  // (0 unless profiling)
   M.self_density = double(ctx.profile.candidates) / double(n);
   M.kept_self.offer(ticket, options, res);
   return res;
@@ -2014,7 +2200,7 @@ std::string deviceMemoryReport() {
       mesh[2] += m.box.bytes();
       mesh[3] += m.diam.bytes();
       mesh[4] += m.level.bytes();
-      mesh[5] += m.entry_tri.bytes() + m.entry_span.bytes();
+      mesh[5] += m.entry_tri.bytes() + m.entry_span.bytes() + m.block_cell.bytes();
       mesh[6] += m.cell_begin.bytes();
       mesh[7] += m.cell_key.bytes();
       mesh[8] += m.slots.bytes();

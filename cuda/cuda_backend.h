@@ -39,8 +39,11 @@
 // a mesh hashed while it is set lists each cell's triangles by size, which only the tile scan
 // uses, and a build for the warp scan skips that sort); KDET_FCL_CUDA_WARP_LANES=1..32 forces the
 // warp scan's lanes per query, KDET_FCL_CUDA_WARP_VISIT=k cuts its cells into visits of k entries
-// and KDET_FCL_CUDA_WARP_TASKS=0 gives each warp one task instead of a counter to take them from
-// (all read at every query, for tests and comparisons). Uploads of deformed
+// and KDET_FCL_CUDA_WARP_TASKS=0 gives each warp one task instead of a counter to take them from;
+// KDET_FCL_CUDA_SELF_CELLS=0 makes a self query scan every level from each triangle's own instead
+// of taking the pairs within a level from the cells, and KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
+// entries per warp task of those cells' pairs (default 8 or 32 by the density; all read at every
+// query, for tests and comparisons). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
 // force the thread count and the chunk size (read at every upload). The pairs come back through
@@ -107,6 +110,10 @@ struct QueryProfile {
                             ///< resident warps; KDET_FCL_CUDA_WARP_TASKS=0: one warp per task)
   bool cells_by_size = false;  ///< the queried meshes' cells list their triangles by decreasing
                                ///< diameter (built for the tile scan, whose early exit needs it)
+  bool self_cell_pairs = false;  ///< a self query took its same-level pairs from the cells and
+                                 ///< scanned only coarser levels (KDET_FCL_CUDA_SELF_CELLS)
+  std::size_t cell_candidates = 0;  ///< of `candidates`, those the cells gave (self_cell_pairs)
+  int cell_rows = 0;  ///< entries per warp task of the cells' pairs (KDET_FCL_CUDA_CELL_ROWS)
   bool self_cached = false;  ///< a self query answered from the kept result of an unchanged mesh
                              ///< (no device work, all times 0; KDET_FCL_CUDA_SELF_CACHE=0: never)
 };

@@ -222,13 +222,16 @@ __device__ __forceinline__ bool entrySeenHere(std::uint32_t v, unsigned int ends
 /// near-misses; elsewhere the filter's setup costs more than it saves, so the host chooses:
 /// spansFor() in cuda_backend.cu). `size_ordered`: the cells of `h` list their triangles by
 /// decreasing diameter, so the scan of a cell ends at its first entry smaller than the query (else
-/// every entry is tested; smaller ones fail the size rule). All arguments must be tile-uniform;
-/// every lane of the tile must call.
+/// every entry is tested; smaller ones fail the size rule). `level_skip` = 1 leaves out the
+/// query's own level (a self query whose same-level pairs come from selfCellPairsKernel in
+/// cuda_backend.cu), 0 scans it. All arguments must be tile-uniform; every lane of the tile must
+/// call.
 template <bool kSpans, class S, class Tile, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const BuildInfo& info,
                                                     const detail::Aabb<double>& qbox, double dq,
-                                                    bool size_ordered, const Tile& tile,
-                                                    Accept&& accept, Emit&& emit) {
+                                                    bool size_ordered, int level_skip,
+                                                    const Tile& tile, Accept&& accept,
+                                                    Emit&& emit) {
   constexpr unsigned int G = Tile::num_threads();
   const unsigned int lane = tile.thread_rank();
   // Only the clipped box stays live through the scan: every entry's box lies inside info.bounds
@@ -241,7 +244,7 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
   // size rule needs d_j >= d_query, so the scan of such a cell stops at the first entry of a
   // smaller sizeKey.
   const unsigned int qkey = sizeKeyOf(dq);
-  for (int L = detail::levelFor(dq, info.grid); L <= info.top_level; ++L) {
+  for (int L = detail::levelFor(dq, info.grid) + level_skip; L <= info.top_level; ++L) {
     if (!((info.level_mask >> L) & 1ull)) continue;
     const detail::CellRange r = detail::cellRange(clipped, L, info.grid);
     const std::uint32_t corners =
@@ -414,14 +417,14 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
 /// after its diameter is loaded instead of ending the cell. A larger P gives a small query set more
 /// warps.
 /// accept(q_owner, j, d_j) and emit(q_owner, j) get the slot of the query that the entry is tested
-/// against. max_visit: 1..kMaxWarpVisit. Every lane of the warp must call, with warp-uniform
-/// arguments except `query`.
+/// against. max_visit: 1..kMaxWarpVisit. level_skip as in scanCandidatesGroup. Every lane of the
+/// warp must call, with warp-uniform arguments except `query`.
 template <bool kSpans, class S, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
                                                    WarpQuery* q,
                                                    const WarpQuery& query, unsigned int log_p,
-                                                   std::uint32_t max_visit, Accept&& accept,
-                                                   Emit&& emit) {
+                                                   std::uint32_t max_visit, int level_skip,
+                                                   Accept&& accept, Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
   const unsigned int P = 1u << log_p;
@@ -438,7 +441,8 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
   c.rest_begin = c.rest_end = c.rest_ends = 0;
   c.pos = 0;
   c.L = info.top_level + 1;
-  if (mine.live) startLevel<kSpans>(c, mine.box, info, detail::levelFor(mine.d, info.grid));
+  if (mine.live)
+    startLevel<kSpans>(c, mine.box, info, detail::levelFor(mine.d, info.grid) + level_skip);
   while (true) {
     std::uint32_t begin = 0, qspan = detail::kWholeCellSpan;
     unsigned int ends = 0;

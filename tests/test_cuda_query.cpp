@@ -487,8 +487,10 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   // CPU's pairs: with and without sub-cell spans, with 1, 2, 4, 8 and 32 lanes per query in the
   // warp scan (KDET_FCL_CUDA_WARP_LANES; by default 1 to 8, by the number of queries and their
   // density), with its cells cut into visits of 1 and 3 entries (KDET_FCL_CUDA_WARP_VISIT), with
-  // its warps' tasks from a counter or one per warp (KDET_FCL_CUDA_WARP_TASKS), and on cells built
-  // for either scan (in size order or not).
+  // its warps' tasks from a counter or one per warp (KDET_FCL_CUDA_WARP_TASKS), on cells built
+  // for either scan (in size order or not), and with self queries taking their same-level pairs
+  // from the cells (default) or scanning every level from the query's own
+  // (KDET_FCL_CUDA_SELF_CELLS=0).
   // Scenes: a stack of 60 crossing sheets (cells of hundreds of entries, more than one warp round
   // per cell), a random soup of many sizes (many levels), a mesh of fewer than 32 triangles (one
   // partial warp), a triangle count that is no multiple of 32, and inter queries under a pose
@@ -554,6 +556,7 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
     const char* visit;
     const char* tasks;  // KDET_FCL_CUDA_WARP_TASKS
     bool rebuild;       // re-hash every mesh under this mode first (cuda::markDeformed)
+    const char* cells = nullptr;  // KDET_FCL_CUDA_SELF_CELLS
   };
   // The cells list their triangles by size only when a mesh was last built under the tile scan
   // (whose early exit needs that order); the tile scan must also be right on cells built for the
@@ -561,16 +564,18 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   bool built_for_tile = true;  // the first mode builds every mesh
   cuda::setProfiling(true);
   for (const Mode m :
-       {Mode{"tile", "0", nullptr, nullptr, nullptr, true},
+       {Mode{"tile", "0", nullptr, nullptr, nullptr, true, "0"},
         Mode{"warp", "0", "1", nullptr, nullptr, false},
-        Mode{"warp", "1", "2", nullptr, "0", true}, Mode{"tile", "1", nullptr, nullptr, nullptr, false},
-        Mode{"warp", "0", "4", "3", nullptr, false}, Mode{"warp", "1", "8", "1", "0", false},
-        Mode{"warp", "0", "32", "3", "1", false}, Mode{"warp", "1", "1", "1", nullptr, true},
+        Mode{"warp", "1", "2", nullptr, "0", true, "0"},
+        Mode{"tile", "1", nullptr, nullptr, nullptr, false},
+        Mode{"warp", "0", "4", "3", nullptr, false, "1"}, Mode{"warp", "1", "8", "1", "0", false},
+        Mode{"warp", "0", "32", "3", "1", false, "0"}, Mode{"warp", "1", "1", "1", nullptr, true},
         Mode{"tile", "0", nullptr, nullptr, nullptr, true},
         Mode{nullptr, "0", nullptr, nullptr, "0", false}}) {
     kdet_test::ScopedEnv scan("KDET_FCL_CUDA_SCAN", m.scan), spans("KDET_FCL_CUDA_SPANS", m.spans),
         lanes("KDET_FCL_CUDA_WARP_LANES", m.lanes), visit("KDET_FCL_CUDA_WARP_VISIT", m.visit),
-        tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks);
+        tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks), cells("KDET_FCL_CUDA_SELF_CELLS", m.cells);
+    const bool cell_pairs = m.cells == nullptr || *m.cells != '0';
     const bool warp = m.scan == nullptr || std::string(m.scan) == "warp";
     const bool dynamic = m.tasks == nullptr || *m.tasks != '0';
     if (m.rebuild) {
@@ -580,6 +585,7 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
     const std::string mode = std::string(m.scan ? m.scan : "default") + ", spans " + m.spans +
                              ", lanes " + (m.lanes ? m.lanes : "-") + ", visit " +
                              (m.visit ? m.visit : "-") + ", tasks " + (m.tasks ? m.tasks : "-") +
+                             ", self cells " + (m.cells ? m.cells : "-") +
                              (m.rebuild ? ", rebuilt" : "");
     for (auto& q : queries) {
       const QueryResult gpu = q.run(on(Backend::Cuda));
@@ -594,6 +600,8 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
       // filling the device with one).
       if (warp && !m.lanes) EXPECT_EQ(p.warp_lanes, 8) << mode;
       EXPECT_EQ(p.spans, *m.spans == '1') << mode;
+      const bool self_query = q.what.find("self") != std::string::npos;
+      EXPECT_EQ(p.self_cell_pairs, self_query && cell_pairs) << q.what << " (" << mode << ")";
       if (q.candidates < 0) q.candidates = static_cast<long long>(p.candidates);
       EXPECT_EQ(static_cast<long long>(p.candidates), q.candidates)
           << q.what << " (" << mode << ")";
@@ -601,6 +609,74 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   }
   cuda::setProfiling(false);
   EXPECT_GT(queries[0].candidates, 100000);  // the stack's cells are crowded
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandidates) {
+  // A self query takes its pairs of triangles of one level from the cells (each pair once, from
+  // its canonical cell) and scans only the coarser levels from each triangle; with
+  // KDET_FCL_CUDA_SELF_CELLS=0 it scans every level from each triangle's own. Both must give the
+  // same candidates and the CPU's pairs, and with the cells on, some of the candidates must come
+  // from them (on the soup, whose pairs span many levels, not all). Scenes: a draped cloth,
+  // a soup of many sizes, crossing near-coplanar sheets (crowded cells), each re-hashed on the
+  // device (compact keys, no read-back) and built with 128-bit cell keys (KDET_FCL_CUDA_FULL_KEYS
+  // with KDET_FCL_CUDA_SYNC_REHASH: another build path), with the cells' partners cut into
+  // visits of one entry (KDET_FCL_CUDA_WARP_VISIT=1) or not, with the sub-cell span filter on
+  // and off (KDET_FCL_CUDA_SPANS), and with 1 to 32 entries per warp task of the cells' pairs
+  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density).
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  struct Scene {
+    const char* what;
+    HashedMesh<S> mesh;
+    bool crossing;      // it has intersecting pairs
+    bool across_levels; // some candidates pair triangles of different levels
+  };
+  Scene scenes[] = {
+      {"draped cloth", HashedMesh<S>(makeDrapedCloth<S>(70, 4, 1, S(0.03), 1)), false, false},
+      {"soup", HashedMesh<S>(makeRandomSoup<S>(4001, 1, S(1e-3), S(0.2), 9)), true, true},
+      {"sheets", HashedMesh<S>(nearCoplanarSheets<S>(24, true, 7)), true, false}};
+  cuda::setProfiling(true);
+  for (Scene& sc : scenes) {
+    const std::vector<TrianglePair> cpu = sorted(intersectSelf(sc.mesh).pairs);
+    if (sc.crossing) EXPECT_GT(cpu.size(), 0u) << sc.what;
+    struct Config {
+      const char *full, *visit, *spans, *rows;
+    };
+    for (const Config c : {Config{"0", "", "1", nullptr}, Config{"0", "1", "0", "1"},
+                           Config{"1", "", "0", "8"}, Config{"1", "1", "1", "32"},
+                           Config{"0", "", "0", "2"}}) {
+      kdet_test::ScopedEnv keys("KDET_FCL_CUDA_FULL_KEYS", c.full),
+          sync("KDET_FCL_CUDA_SYNC_REHASH", c.full), cut("KDET_FCL_CUDA_WARP_VISIT", c.visit),
+          spans("KDET_FCL_CUDA_SPANS", c.spans), rows("KDET_FCL_CUDA_CELL_ROWS", c.rows);
+      cuda::markDeformed(sc.mesh);  // re-hash under these keys
+      long long candidates = -1;
+      for (const char* cells : {"1", "0"}) {
+        kdet_test::ScopedEnv on_off("KDET_FCL_CUDA_SELF_CELLS", cells);
+        const std::string what = std::string(sc.what) + ", full keys " + c.full + ", visit '" +
+                                 c.visit + "', spans " + c.spans + ", rows " +
+                                 (c.rows ? c.rows : "-") + ", self cells " + cells;
+        EXPECT_EQ(intersectSelf(sc.mesh, on(Backend::Cuda)).pairs, cpu) << what;
+        const cuda::QueryProfile p = cuda::lastQueryProfile();
+        EXPECT_EQ(p.spans, *c.spans == '1') << what;
+        if (*cells == '1') {
+          EXPECT_TRUE(p.self_cell_pairs) << what;
+          if (c.rows) EXPECT_EQ(p.cell_rows, std::atoi(c.rows)) << what;
+          else EXPECT_TRUE(p.cell_rows == 8 || p.cell_rows == 32) << what;
+          EXPECT_GT(p.cell_candidates, 0u) << what;
+          EXPECT_LE(p.cell_candidates, p.candidates) << what;
+          if (sc.across_levels) EXPECT_LT(p.cell_candidates, p.candidates) << what;
+          candidates = static_cast<long long>(p.candidates);
+        } else {
+          EXPECT_FALSE(p.self_cell_pairs) << what;
+          EXPECT_EQ(p.cell_candidates, 0u) << what;
+          EXPECT_EQ(static_cast<long long>(p.candidates), candidates) << what;
+        }
+      }
+    }
+  }
+  cuda::setProfiling(false);
 #endif
 }
 
