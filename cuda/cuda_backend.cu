@@ -1817,20 +1817,20 @@ bool selfCellPairs() {
   return !(e != nullptr && *e == '0');
 }
 
-/// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least twice the
-/// resident warps (64 per SM) and the cells are not crowded (the candidates per triangle of the
-/// mesh's last self query, as spansFor, at most 4), else 8. Measured on an H100
+/// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least as many as the
+/// warps an H100-class SM holds (64 per SM) and the cells are not crowded (the candidates per
+/// triangle of the mesh's last self query, as spansFor, at most 4), else 8. Measured on an H100
 /// (benchmarks/RESULTS-gpu.md): 8 rows took the cloth ball's cell pass from 356 to 159 us (its
 /// 32-row tasks in crowded cells, up to 361 entries, left a tail at 24 % occupancy) and phase 1
-/// of the small scenes down by 4-16 %, but the 1M cloth's cell pass (cells of at most 161) from
-/// 497 to 626 us. KDET_FCL_CUDA_CELL_ROWS = 1, 2, 4, 8, 16 or 32 forces it (read at every query;
+/// of the funnel and the 20k cloth down by 6-15 %, but the 1M cloth's cell pass (cells of at most
+/// 161) from 497 to 626 us; the n-body (400k entries) and the 200k-1M cloths run faster with 32. KDET_FCL_CUDA_CELL_ROWS = 1, 2, 4, 8, 16 or 32 forces it (read at every query;
 /// a divisor of 32, so that a task's entries lie in the 32 cells from its block_cell).
 std::uint32_t cellRows(std::size_t entries, double density) {
   const char* e = std::getenv("KDET_FCL_CUDA_CELL_ROWS");
   const long v = (e != nullptr && *e) ? std::atol(e) : 0;
   for (long r = 1; r <= 32; r *= 2)
     if (v == r) return static_cast<std::uint32_t>(v);
-  const std::size_t fill = 2 * 64 * static_cast<std::size_t>(g_num_sms);
+  const std::size_t fill = 64 * static_cast<std::size_t>(g_num_sms);
   return density <= 4.0 && entries / 32 >= fill ? 32u : 8u;
 }
 
