@@ -1809,12 +1809,18 @@ WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long t
 }
 
 /// Whether a self query takes its same-level pairs from the cells (selfCellPairsKernel) and scans
-/// only the coarser levels (KDET_FCL_CUDA_SELF_CELLS unset or 1), or scans every level from each
-/// triangle's own (0). Read at every query, so tests and benchmarks can compare the two. Both give
-/// the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
-bool selfCellPairs() {
+/// only the coarser levels, or scans every level from each triangle's own. By default the cells
+/// are used for meshes of at least 48 x 32 entries per SM (203k on an H100): measured on an H100
+/// (benchmarks/RESULTS-gpu.md), phase 1 gained 3-16 % from the n-body (399k entries) and the cloth
+/// ball (268k) up, was level on the 90k cloth (240k) and lost 2-7 % on the funnel, the 20k and
+/// the 40k cloths (49k-111k), where the extra kernel and its tail cost more than the lookups it
+/// saves. KDET_FCL_CUDA_SELF_CELLS = 1 or 0 forces it on or off (read at every query, so tests and
+/// benchmarks can compare the two). Both give the same candidates.
+bool selfCellPairs(std::size_t entries) {
   const char* e = std::getenv("KDET_FCL_CUDA_SELF_CELLS");
-  return !(e != nullptr && *e == '0');
+  if (e != nullptr && *e == '0') return false;
+  if (e != nullptr && *e == '1') return true;
+  return entries >= 48 * 32 * static_cast<std::size_t>(g_num_sms);
 }
 
 /// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least as many as the
@@ -2060,7 +2066,8 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   const bool filter = usePlaneFilter(options);
   const bool spans = spansFor(M.self_density);
   const bool warp = warpScan();
-  const bool cell_pairs = selfCellPairs();
+  // (The entry count of the last build that read it back: an estimate after a re-hash.)
+  const bool cell_pairs = selfCellPairs(M.info.entries);
   const int level_skip = cell_pairs ? 1 : 0;
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
@@ -2071,7 +2078,6 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
     bindInfo<S>(s, M, nullptr);
     if (cell_pairs) {
       const auto kernel = spans ? selfCellPairsKernel<S, true> : selfCellPairsKernel<S, false>;
-      // (The entry count of the last build that read it back: an estimate after a re-hash.)
       const std::uint32_t rows = cellRows(M.info.entries, M.self_density);
       ctx.profile.cell_rows = static_cast<int>(rows);
       const unsigned int blocks = residentBlocks(

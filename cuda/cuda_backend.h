@@ -40,8 +40,9 @@
 // uses, and a build for the warp scan skips that sort); KDET_FCL_CUDA_WARP_LANES=1..32 forces the
 // warp scan's lanes per query, KDET_FCL_CUDA_WARP_VISIT=k cuts its cells into visits of k entries
 // and KDET_FCL_CUDA_WARP_TASKS=0 gives each warp one task instead of a counter to take them from;
-// KDET_FCL_CUDA_SELF_CELLS=0 makes a self query scan every level from each triangle's own instead
-// of taking the pairs within a level from the cells, and KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
+// KDET_FCL_CUDA_SELF_CELLS=0|1 makes a self query scan every level from each triangle's own, or
+// take the pairs within a level from the cells and scan only the coarser levels (default: the
+// cells for meshes of about 200k cell entries and more), and KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
 // entries per warp task of those cells' pairs (default 8 or 32 by the density; all read at every
 // query, for tests and comparisons). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host

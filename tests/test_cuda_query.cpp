@@ -489,8 +489,8 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   // density), with its cells cut into visits of 1 and 3 entries (KDET_FCL_CUDA_WARP_VISIT), with
   // its warps' tasks from a counter or one per warp (KDET_FCL_CUDA_WARP_TASKS), on cells built
   // for either scan (in size order or not), and with self queries taking their same-level pairs
-  // from the cells (default) or scanning every level from the query's own
-  // (KDET_FCL_CUDA_SELF_CELLS=0).
+  // from the cells or scanning every level from the query's own (KDET_FCL_CUDA_SELF_CELLS=1 or 0;
+  // unset, these meshes are far below the size from which the cells are used by default).
   // Scenes: a stack of 60 crossing sheets (cells of hundreds of entries, more than one warp round
   // per cell), a random soup of many sizes (many levels), a mesh of fewer than 32 triangles (one
   // partial warp), a triangle count that is no multiple of 32, and inter queries under a pose
@@ -565,17 +565,18 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   cuda::setProfiling(true);
   for (const Mode m :
        {Mode{"tile", "0", nullptr, nullptr, nullptr, true, "0"},
-        Mode{"warp", "0", "1", nullptr, nullptr, false},
+        Mode{"warp", "0", "1", nullptr, nullptr, false, "1"},
         Mode{"warp", "1", "2", nullptr, "0", true, "0"},
-        Mode{"tile", "1", nullptr, nullptr, nullptr, false},
-        Mode{"warp", "0", "4", "3", nullptr, false, "1"}, Mode{"warp", "1", "8", "1", "0", false},
-        Mode{"warp", "0", "32", "3", "1", false, "0"}, Mode{"warp", "1", "1", "1", nullptr, true},
+        Mode{"tile", "1", nullptr, nullptr, nullptr, false, "1"},
+        Mode{"warp", "0", "4", "3", nullptr, false, "1"},
+        Mode{"warp", "1", "8", "1", "0", false, "1"}, Mode{"warp", "0", "32", "3", "1", false, "0"},
+        Mode{"warp", "1", "1", "1", nullptr, true, "1"},
         Mode{"tile", "0", nullptr, nullptr, nullptr, true},
         Mode{nullptr, "0", nullptr, nullptr, "0", false}}) {
     kdet_test::ScopedEnv scan("KDET_FCL_CUDA_SCAN", m.scan), spans("KDET_FCL_CUDA_SPANS", m.spans),
         lanes("KDET_FCL_CUDA_WARP_LANES", m.lanes), visit("KDET_FCL_CUDA_WARP_VISIT", m.visit),
         tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks), cells("KDET_FCL_CUDA_SELF_CELLS", m.cells);
-    const bool cell_pairs = m.cells == nullptr || *m.cells != '0';
+    const bool cell_pairs = m.cells != nullptr && *m.cells == '1';
     const bool warp = m.scan == nullptr || std::string(m.scan) == "warp";
     const bool dynamic = m.tasks == nullptr || *m.tasks != '0';
     if (m.rebuild) {
@@ -744,6 +745,9 @@ TEST(CudaQuery, RehashWithoutReadBackAndItsFallbacks) {
   if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
     GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
 #if KDET_FCL_TEST_HAVE_CUDA
+  // Self queries take their same-level pairs from the cells here too (these meshes are below the
+  // default's size): the forced overflows below must keep that kernel inside the arrays as well.
+  kdet_test::ScopedEnv cells("KDET_FCL_CUDA_SELF_CELLS", "1");
   cuda::setProfiling(true);
   HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 0.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
