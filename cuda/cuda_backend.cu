@@ -1829,8 +1829,9 @@ bool selfCellPairs(std::size_t entries) {
 /// (benchmarks/RESULTS-gpu.md): 8 rows took the cloth ball's cell pass from 356 to 159 us (its
 /// 32-row tasks in crowded cells, up to 361 entries, left a tail at 24 % occupancy) and phase 1
 /// of the funnel and the 20k cloth down by 6-15 %, but the 1M cloth's cell pass (cells of at most
-/// 161) from 497 to 626 us; the n-body (400k entries) and the 200k-1M cloths run faster with 32. KDET_FCL_CUDA_CELL_ROWS = 1, 2, 4, 8, 16 or 32 forces it (read at every query;
-/// a divisor of 32, so that a task's entries lie in the 32 cells from its block_cell).
+/// 161) from 497 to 626 us; the n-body (400k entries) and the 200k-1M cloths run faster with 32.
+/// KDET_FCL_CUDA_CELL_ROWS = 1, 2, 4, 8, 16 or 32 forces it (read at every query; a divisor of
+/// 32, so that a task's entries lie in the 32 cells from its block_cell).
 std::uint32_t cellRows(std::size_t entries, double density) {
   const char* e = std::getenv("KDET_FCL_CUDA_CELL_ROWS");
   const long v = (e != nullptr && *e) ? std::atol(e) : 0;

@@ -624,7 +624,7 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
   // with KDET_FCL_CUDA_SYNC_REHASH: another build path), with the cells' partners cut into
   // visits of one entry (KDET_FCL_CUDA_WARP_VISIT=1) or not, with the sub-cell span filter on
   // and off (KDET_FCL_CUDA_SPANS), and with 1 to 32 entries per warp task of the cells' pairs
-  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density).
+  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density and the size).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
