@@ -662,9 +662,7 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
     const std::uint32_t c0 = __ldg(block_cell + first / 32);
     const std::uint32_t cl = c0 + lane + 1;
     const std::uint32_t cell_end = __ldg(M.cell_begin + (cl < cells ? cl : cells));
-    int o = 0;
-    for (int step = 16; step > 0; step >>= 1)
-      if (__shfl_sync(kFull, cell_end, o + step - 1) <= k) o += step;
+    const int o = warpOwnerOf(cell_end, k);
     const std::uint32_t end = __shfl_sync(kFull, cell_end, o);
     const std::uint32_t prev_end = __shfl_sync(kFull, cell_end, o > 0 ? o - 1 : 0);
     const std::uint32_t begin = o > 0 ? prev_end : __ldg(M.cell_begin + c0);
@@ -681,18 +679,12 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
     __syncwarp();
     while (true) {
       const std::uint32_t cnt = stop - next < max_visit ? stop - next : max_visit;
-      std::uint32_t incl = cnt;
-      for (int d = 1; d < 32; d <<= 1) {
-        const std::uint32_t y = __shfl_up_sync(kFull, incl, d);
-        if (lane >= static_cast<unsigned int>(d)) incl += y;
-      }
+      const std::uint32_t incl = warpInclusiveSum(cnt);
       const std::uint32_t total = __shfl_sync(kFull, incl, 31);
       if (total == 0) break;
       for (std::uint32_t base = 0; base < total; base += 32) {
         const std::uint32_t t = base + lane;
-        int owner = 0;
-        for (int step = 16; step > 0; step >>= 1)
-          if (__shfl_sync(kFull, incl, owner + step - 1) <= t) owner += step;
+        const int owner = warpOwnerOf(incl, t);
         const std::uint32_t o_first =
             __shfl_sync(kFull, incl, owner) - __shfl_sync(kFull, cnt, owner);
         const std::uint32_t o_next = __shfl_sync(kFull, next, owner);

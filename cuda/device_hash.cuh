@@ -406,6 +406,27 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
   return count;
 }
 
+/// The inclusive prefix sum of the lanes' counts across the warp: lane o then owns the warp's
+/// items [incl_o - count_o, incl_o). Every lane must call.
+__device__ __forceinline__ std::uint32_t warpInclusiveSum(std::uint32_t count) {
+  const unsigned int lane = threadIdx.x & 31u;
+  std::uint32_t incl = count;
+  for (int o = 1; o < 32; o <<= 1) {
+    const std::uint32_t y = __shfl_up_sync(0xFFFFFFFFu, incl, o);
+    if (lane >= static_cast<unsigned int>(o)) incl += y;
+  }
+  return incl;
+}
+
+/// The first lane whose value of `incl` (non-decreasing across the lanes) exceeds t; 31 when
+/// none does. With warpInclusiveSum: the lane that owns item t. Every lane must call.
+__device__ __forceinline__ int warpOwnerOf(std::uint32_t incl, std::uint32_t t) {
+  int owner = 0;
+  for (int step = 16; step > 0; step >>= 1)
+    if (__shfl_sync(0xFFFFFFFFu, incl, owner + step - 1) <= t) owner += step;
+  return owner;
+}
+
 /// The warp-wide form of scanCandidatesGroup: the same candidates (size rule, box overlap,
 /// canonical cell), for 32 / P queries at once, P = 2^log_p lanes per query (1, 2, 4, ..., 32; lane
 /// l serves the query in slot l / P of q, this warp's slots; `query` is the lane's query, which
@@ -448,21 +469,13 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
     unsigned int ends = 0;
     const std::uint32_t count =
         nextVisit<kSpans>(h, info, mine, max_visit, P, sub, c, begin, ends, qspan);
-    // Inclusive prefix sum of the lanes' counts: lane o owns the warp's entries
-    // [incl_o - count_o, incl_o).
-    std::uint32_t incl = count;
-    for (int o = 1; o < 32; o <<= 1) {
-      const std::uint32_t y = __shfl_up_sync(kFull, incl, o);
-      if (lane >= static_cast<unsigned int>(o)) incl += y;
-    }
+    // Lane o owns the warp's entries [incl_o - count_o, incl_o).
+    const std::uint32_t incl = warpInclusiveSum(count);
     const std::uint32_t total = __shfl_sync(kFull, incl, 31);
     if (total == 0) break;  // every lane's lookups are done
     for (std::uint32_t base = 0; base < total; base += 32) {
       const std::uint32_t t = base + lane;
-      // The owner of entry t: the first lane whose inclusive sum exceeds t.
-      int owner = 0;
-      for (int step = 16; step > 0; step >>= 1)
-        if (__shfl_sync(kFull, incl, owner + step - 1) <= t) owner += step;
+      const int owner = warpOwnerOf(incl, t);
       const std::uint32_t o_first =
           __shfl_sync(kFull, incl, owner) - __shfl_sync(kFull, count, owner);
       const std::uint32_t o_begin = __shfl_sync(kFull, begin, owner);
