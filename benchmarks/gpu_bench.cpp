@@ -2,7 +2,7 @@
 // (gpu_bvh.cu), the CPU backend and FCL 0.7, per frame, in one run.
 //
 //   gpu_bench [--data DIR] [--repeats N] [--only SUBSTR]... [--no-fcl] [--no-cpu] [--quick]
-//             [--big] [--csv FILE] [--json FILE] [--md FILE]
+//             [--big] [--joint deforming|all|none] [--csv FILE] [--json FILE] [--md FILE]
 //
 // DIR holds unc/{cloth-ball,cloth-funnel,n-body-simulation} (default: $KDET_FCL_DATA_DIR, else
 // ../shared/data beside the source tree); scenes whose files are missing are skipped.
@@ -17,6 +17,15 @@
 //     CPU alike; KDET_FCL_CUDA_SELF_CACHE=0 and KDET_FCL_CPU_SELF_CACHE=0 recompute it every
 //     frame). --big adds a 10M-triangle cloth (2 frames; kDet GPU and LBVH only: the CPU and
 //     FCL would take minutes per frame).
+// Joint form (--joint, default `deforming`): in a scene of two DEFORMING objects that asks for
+// both selfs and their inter pairs (the UNC two-frame scenes), kDet GPU calls intersectAll (one
+// hash of both meshes, one self query; cuda/cuda_backend.h) and the LBVH gets the same form: one
+// tree over both meshes (kdet_bvh::jointMesh, its joint vertices prepared per frame outside the
+// timing), one self query with the split, its pairs dealt out after the timing (splitJoint).
+// `all` uses the joint form on every scene of two objects with both selfs and their inter pairs
+// (the cloth over a static sphere too, whose kept self result it then gives up); `none` runs the
+// three queries everywhere, for both GPU methods (the runs before 2026-11-23). The CPU methods
+// and FCL are unchanged. The CSV's `form` column says which form a row ran.
 // Device memory: cuda::deviceBytesInUse() after kDet GPU's first frame of a scene (one frame's
 // meshes resident, plus the backend's scratch), divided by the scene's triangles ("B/tri").
 // Per frame, each method does what a new frame costs it:
@@ -117,6 +126,7 @@ struct Row {
   double fcl_pairs = 0, fcl_diff = 0;
   bool agree = true, big_target = false;
   std::string disagreement;
+  std::string form = "separate";  // the GPU methods' form: "joint" or "separate" (--joint)
 };
 
 QueryOptions opts(Backend b, int threads = 0) {
@@ -179,6 +189,7 @@ using kdet_bench_util::selfFromPair;
 struct Config {
   int repeats = 10;
   bool fcl = true, cpu = true, quick = false, big = false;
+  std::string joint = "deforming";  // --joint: deforming | all | none
   std::vector<std::string> only;
 };
 
@@ -194,6 +205,14 @@ Row runScene(const BScene& sc, const Config& cfg) {
   const int rounds = std::max(cfg.repeats, (30 + F - 1) / F);
   const bool large = r.triangles > 300000;
   const bool do_cpu = cfg.cpu && !sc.huge, do_fcl = cfg.fcl && !sc.huge;
+  // Both GPU methods run a scene of two objects with both selfs and their inter pairs as one
+  // query (the joint form, see the file comment) when --joint allows it.
+  const bool pair_scene = nobj == 2 && sc.self == std::vector<int>{0, 1} &&
+                          sc.inter == std::vector<std::pair<int, int>>{{0, 1}};
+  const bool joint = pair_scene && (cfg.joint == "all" ||
+                                    (cfg.joint == "deforming" && sc.objs[0].deforming &&
+                                     sc.objs[1].deforming));
+  r.form = joint ? "joint" : "separate";
   std::fprintf(stderr, "[%s] %zu triangles, %d frame(s): preparing\n", sc.id.c_str(), r.triangles, F);
   cuda::releaseDeviceMemory();
 
@@ -209,31 +228,61 @@ Row runScene(const BScene& sc, const Config& cfg) {
     for (int o = 0; o < nobj; ++o)
       if (sc.objs[o].deforming) cuda::markDeformed(H(o, f));
     std::size_t n = 0;
+    auto profiled = [&] {  // after each GPU call
+      if (!prof) return;
+      const cuda::QueryProfile p = cuda::lastQueryProfile();
+      prof->build_ms += p.build_ms;
+      prof->query_ms += p.query_ms;
+      prof->candidates_ms += p.candidates_ms;
+      prof->output_ms += p.output_ms;
+      prof->total_ms += p.total_ms;
+      prof->candidates += p.candidates;
+    };
     auto take = [&](QueryResult q) {
-      if (prof) {
-        const cuda::QueryProfile p = cuda::lastQueryProfile();
-        prof->build_ms += p.build_ms;
-        prof->query_ms += p.query_ms;
-        prof->candidates_ms += p.candidates_ms;
-        prof->output_ms += p.output_ms;
-        prof->total_ms += p.total_ms;
-        prof->candidates += p.candidates;
-      }
       n += q.pairs.size();
       if (sets) sets->push_back(std::move(q.pairs));
     };
-    for (int o : sc.self) take(intersectSelf(H(o, f), opts(Backend::Cuda)));
-    for (auto [a, b] : sc.inter) take(intersectMeshes(H(a, f), H(b, f), opts(Backend::Cuda)));
+    if (joint) {
+      AllPairsResult all = intersectAll(H(0, f), H(1, f), opts(Backend::Cuda));
+      profiled();
+      take(std::move(all.self_a));
+      take(std::move(all.self_b));
+      take(std::move(all.inter));
+      return n;
+    }
+    for (int o : sc.self) {
+      take(intersectSelf(H(o, f), opts(Backend::Cuda)));
+      profiled();
+    }
+    for (auto [a, b] : sc.inter) {
+      take(intersectMeshes(H(a, f), H(b, f), opts(Backend::Cuda)));
+      profiled();
+    }
     return n;
   };
 
-  // LBVH GPU: one tree per object, built at frame 0, refit (or rebuilt) per frame.
-  std::vector<std::unique_ptr<kdet_bvh::GpuBvh<float>>> bv(nobj);
-  for (int o = 0; o < nobj; ++o) {
+  // LBVH GPU: one tree per object, built at frame 0, refit (or rebuilt) per frame; in the joint
+  // form one tree over both objects (their joint meshes, one per frame, made here).
+  std::vector<std::unique_ptr<kdet_bvh::GpuBvh<float>>> bv(joint ? 1 : nobj);
+  std::vector<TriangleMesh<float>> joint_frames;
+  const auto split = static_cast<std::uint32_t>(sc.mesh(0, 0).numTriangles());
+  if (joint)
+    for (int f = 0; f < F; ++f) joint_frames.push_back(kdet_bvh::jointMesh(sc.mesh(0, f), sc.mesh(1, f)));
+  for (std::size_t o = 0; o < bv.size(); ++o) {
     bv[o] = std::make_unique<kdet_bvh::GpuBvh<float>>();
-    bv[o]->setMesh(sc.mesh(o, 0));
+    bv[o]->setMesh(joint ? joint_frames[0] : sc.mesh(int(o), 0));
   }
   auto bvhFrame = [&](int f, bool rebuild, std::vector<Pairs>* sets) {
+    if (joint) {
+      const auto& v = joint_frames[f].vertices;
+      if (rebuild) bv[0]->rebuildVertices(v);
+      else bv[0]->updateVertices(v);
+      Pairs all = kdet_bvh::intersectSelf(*bv[0], Predicate::Exact, split);
+      const std::size_t n = all.size();
+      if (sets)
+        for (Pairs& p : kdet_bvh::splitJoint(all, split)) sets->push_back(std::move(p));
+      return n;
+    }
     for (int o = 0; o < nobj; ++o)
       if (sc.objs[o].deforming) {
         if (rebuild) bv[o]->rebuildVertices(sc.mesh(o, f).vertices);
@@ -275,6 +324,8 @@ Row runScene(const BScene& sc, const Config& cfg) {
   // Device memory of one frame: the caches of frame 0's meshes plus the backend's scratch.
   kdetGpuFrame(0, nullptr, nullptr);
   r.bytes_per_tri = double(cuda::deviceBytesInUse()) / double(r.triangles);
+  std::fprintf(stderr, "[%s] device memory %.0f B/tri: %s\n", sc.id.c_str(), r.bytes_per_tri,
+               cuda::deviceMemoryReport().c_str());
 
   // ---- correctness pass (untimed): every frame, every method ----
   std::vector<std::unique_ptr<HashedMesh<float>>> cpu2, cpu16;
@@ -569,12 +620,14 @@ std::string markdown(const std::vector<Row>& rows, const std::string& device) {
   for (const Row& r : rows) {
     const std::string fcl = r.fcl_kind == "skipped" ? "skipped"
                             : fmt(r.fcl_ms, 1) + (r.fcl_kind == "self-pair" ? " †" : "");
-    md += "| " + r.label + " | " + thousands(double(r.triangles)) + " | " + fmt(r.kdet_ms) +
+    md += "| " + r.label + (r.form == "joint" ? " (joint)" : "") + " | " +
+          thousands(double(r.triangles)) + " | " + fmt(r.kdet_ms) +
           " | " + fmt(r.bvh_ms) + " | " + ratio(r.bvh_ms, r.kdet_ms) + " | " + fcl + " | " +
           (r.fcl_kind == "skipped" ? "n/a" : ratio(r.fcl_ms, r.kdet_ms)) + " | " +
           fmt(r.cpu2_ms, 2) + " | " + fmt(r.cpu16_ms, 2) + " | " + thousands(r.pairs) + " | " +
           (r.agree ? "yes" : "**NO**") + " | " + fmt(r.bytes_per_tri, 0) + " |\n";
   }
+  md += "\n(joint): both GPU methods ran the scene's two meshes as one query (gpu_bench --joint).\n";
   md += "\nBreakdown (medians per frame, ms; device events):\n\n";
   md += "| scene | kDet build | kDet query (cand) | kDet out | kDet cands | kDet wall | LBVH upload | "
         "LBVH refit | LBVH traverse | LBVH exact | LBVH out | LBVH cands | LBVH wall | LBVH "
@@ -616,13 +669,22 @@ int main(int argc, char** argv) {
     else if (a == "--no-cpu") cfg.cpu = false;
     else if (a == "--quick") cfg.quick = true;
     else if (a == "--big") cfg.big = true;
+    else if (a == "--joint" && i + 1 < argc) {
+      cfg.joint = argv[++i];
+      if (cfg.joint != "deforming" && cfg.joint != "all" && cfg.joint != "none") {
+        std::fprintf(stderr, "gpu_bench: --joint takes deforming, all or none, not '%s'\n",
+                     cfg.joint.c_str());
+        return 2;
+      }
+    }
     else if (a == "--csv" && i + 1 < argc) csv = argv[++i];
     else if (a == "--json" && i + 1 < argc) json = argv[++i];
     else if (a == "--md" && i + 1 < argc) mdfile = argv[++i];
     else {
       std::fprintf(stderr,
                    "usage: gpu_bench [--data DIR] [--repeats N] [--only SUBSTR]... [--no-fcl] "
-                   "[--no-cpu] [--quick] [--big] [--csv FILE] [--json FILE] [--md FILE]\n");
+                   "[--no-cpu] [--quick] [--big] [--joint deforming|all|none] [--csv FILE] "
+                   "[--json FILE] [--md FILE]\n");
       return 2;
     }
   }
@@ -652,10 +714,10 @@ int main(int argc, char** argv) {
     }
     std::printf(
         "%-22s tris=%9zu pairs=%10.0f kDet GPU %8.3f ms (wall %8.3f) | LBVH %8.3f ms (wall %8.3f, "
-        "rebuild %8.3f) | x%.2f | CPU2 %9.2f CPU16 %8.2f | FCL(%s) %9.1f | %.0f B/tri | %s\n",
+        "rebuild %8.3f) | x%.2f | CPU2 %9.2f CPU16 %8.2f | FCL(%s) %9.1f | %.0f B/tri | %s | %s\n",
         r.id.c_str(), r.triangles, r.pairs, r.kdet_ms, r.kdet_wall, r.bvh_ms, r.bvh_wall,
         r.bvh_rebuild_ms, r.bvh_ms / r.kdet_ms, r.cpu2_ms, r.cpu16_ms, r.fcl_kind.c_str(),
-        r.fcl_ms, r.bytes_per_tri, r.agree ? "agree" : "DISAGREEMENT");
+        r.fcl_ms, r.bytes_per_tri, r.form.c_str(), r.agree ? "agree" : "DISAGREEMENT");
     if (!r.agree) {
       std::printf("\n!!!!!!!! DISAGREEMENT in %s: %s\n\n", r.id.c_str(), r.disagreement.c_str());
       ok = false;
@@ -673,7 +735,7 @@ int main(int argc, char** argv) {
            "kdet_query_ms,kdet_candidates_ms,kdet_output_ms,kdet_candidates,lbvh_ms,lbvh_wall_ms,"
            "lbvh_rebuild_ms,lbvh_upload_ms,lbvh_refit_ms,lbvh_traverse_ms,lbvh_exact_ms,"
            "lbvh_output_ms,lbvh_candidates,cpu2_ms,cpu16_ms,fcl_kind,fcl_ms,fcl_refit_ms,"
-           "fcl_pairs,fcl_diff,agree,kdet_bytes_per_triangle\n";
+           "fcl_pairs,fcl_diff,agree,kdet_bytes_per_triangle,form\n";
     for (const Row& r : rows)
       out << r.id << ",\"" << r.label << "\"," << r.triangles << ',' << r.frames << ',' << r.pairs
           << ',' << r.kdet_ms << ',' << r.kdet_wall << ',' << r.kdet_build << ',' << r.kdet_query
@@ -682,7 +744,7 @@ int main(int argc, char** argv) {
           << ',' << r.bvh_refit << ',' << r.bvh_traverse << ',' << r.bvh_exact << ','
           << r.bvh_out << ',' << r.bvh_cands << ',' << r.cpu2_ms << ',' << r.cpu16_ms << ','
           << r.fcl_kind << ',' << r.fcl_ms << ',' << r.fcl_refit << ',' << r.fcl_pairs << ','
-          << r.fcl_diff << ',' << r.agree << ',' << r.bytes_per_tri << '\n';
+          << r.fcl_diff << ',' << r.agree << ',' << r.bytes_per_tri << ',' << r.form << '\n';
   }
   if (!json.empty()) {
     std::ofstream out(json);
@@ -708,6 +770,7 @@ int main(int argc, char** argv) {
           << "\", \"fcl_ms\": " << num(r.fcl_ms) << ", \"fcl_pairs\": " << num(r.fcl_pairs)
           << ", \"fcl_diff\": " << num(r.fcl_diff)
           << ", \"kdet_bytes_per_triangle\": " << num(r.bytes_per_tri)
+          << ", \"form\": \"" << r.form << "\""
           << ", \"agree\": " << (r.agree ? "true" : "false") << "}"
           << (i + 1 < rows.size() ? "," : "") << "\n";
     }

@@ -454,22 +454,30 @@ __global__ void __launch_bounds__(kBlock)
 }
 
 /// Self: pairs with a vertex of equal coordinates are adjacent; the others get the exact test.
+/// Two meshes in one tree (split > 0: triangles [0, split) are the first's): a pair across them
+/// is never adjacent, and its test takes the first mesh's triangle first, as intersect() does.
 template <class S, class K>
 __global__ void __launch_bounds__(kBlock)
     selfExactKernel(const unsigned long long* __restrict__ cand, const unsigned long long* count,
                     unsigned long long cap, const Vec3<S>* __restrict__ v,
-                    const std::uint32_t* __restrict__ t, Sink out) {
+                    const std::uint32_t* __restrict__ t, std::uint32_t split, Sink out) {
   const unsigned long long m = *count < cap ? *count : cap;
   for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
        k += gridDim.x * blockDim.x) {
     const unsigned long long c = cand[k];
-    const auto i = std::uint32_t(c >> 32), j = std::uint32_t(c);
+    auto i = std::uint32_t(c >> 32), j = std::uint32_t(c);
+    const bool same = (i < split) == (j < split);
+    if (!same && i > j) {
+      const std::uint32_t x = i;
+      i = j;
+      j = x;
+    }
     const Vec3<S> vi[3] = {v[t[3 * i]], v[t[3 * i + 1]], v[t[3 * i + 2]]};
     const Vec3<S> vj[3] = {v[t[3 * j]], v[t[3 * j + 1]], v[t[3 * j + 2]]};
     bool adjacent = false;
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) adjacent = adjacent || vi[a] == vj[b];
-    if (!adjacent &&
+    if (!(adjacent && same) &&
         kdet_fcl::detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2]))
       emit(out, i < j ? i : j, i < j ? j : i);
   }
@@ -781,14 +789,16 @@ std::vector<TrianglePair> intersect(GpuBvh<S>& A, const kdet_fcl::Transform<S>& 
 }
 
 template <class S>
-std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate) {
+std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate, std::uint32_t split) {
   auto& m = M.impl();
   if (m.n < 2) return {};
   kdet_fcl::QueryOptions options;
   options.predicate = predicate;
   kdet_fcl::detail::KeptSelfResult::Ticket ticket;
   kdet_fcl::QueryResult kept;
-  if (m.kept_self.find(m.geometry, options, &kept, &ticket)) return std::move(kept.pairs);
+  // (A kept result is of the tree as one mesh: split queries neither use nor keep one.)
+  if (split == 0 && m.kept_self.find(m.geometry, options, &kept, &ticket))
+    return std::move(kept.pairs);
   g_timer.begin();
   std::vector<TrianglePair> out;
   withKernel(predicate, [&](auto k) {
@@ -802,12 +812,12 @@ std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate) {
         [&](const unsigned long long* cand, const unsigned long long* count,
             unsigned long long cap, Sink out_sink) {
           selfExactKernel<S, K><<<exactGrid(cap), kBlock>>>(cand, count, cap, m.v.p, m.t.p,
-                                                            out_sink);
+                                                            split, out_sink);
           BVH_LAUNCHED();
         });
   });
   g_timer.end();
-  if (ticket.keep) {
+  if (split == 0 && ticket.keep) {
     kdet_fcl::QueryResult r;
     r.pairs = out;
     m.kept_self.offer(ticket, options, r);
@@ -820,7 +830,7 @@ std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate) {
   template std::vector<TrianglePair> intersect<S>(GpuBvh<S>&, const kdet_fcl::Transform<S>&, \
                                                   GpuBvh<S>&, const kdet_fcl::Transform<S>&, \
                                                   Predicate);                                \
-  template std::vector<TrianglePair> intersectSelf<S>(GpuBvh<S>&, Predicate);
+  template std::vector<TrianglePair> intersectSelf<S>(GpuBvh<S>&, Predicate, std::uint32_t);
 KDET_BVH_INSTANTIATE(float)
 KDET_BVH_INSTANTIATE(double)
 

@@ -23,6 +23,7 @@
 //
 // Every call is synchronous and runs on the legacy default stream of this module's runtime.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -91,10 +92,44 @@ std::vector<kdet_fcl::TrianglePair> intersect(GpuBvh<S>& a, const kdet_fcl::Tran
                                                   kdet_fcl::Predicate::Exact);
 
 /// Every pair (i < j) of intersecting triangles of one mesh, except pairs sharing a vertex (index
-/// or coordinates), as kdet_fcl::intersectSelf. Sorted by (a, b).
+/// or coordinates), as kdet_fcl::intersectSelf. Sorted by (a, b). With split > 0 the tree holds
+/// two meshes (triangles [0, split) are the first's; the benchmark's joint form of two deforming
+/// meshes, as kdet_fcl::intersectAll on the GPU): a pair across them is never adjacent and is
+/// decided as intersect() decides it, so the result is both self queries' and the inter query's
+/// pairs in one list (split it with splitJoint).
 template <class S>
 std::vector<kdet_fcl::TrianglePair> intersectSelf(GpuBvh<S>& mesh,
                                                   kdet_fcl::Predicate predicate =
-                                                      kdet_fcl::Predicate::Exact);
+                                                      kdet_fcl::Predicate::Exact,
+                                                  std::uint32_t split = 0);
+
+/// The two meshes as one (the second's vertices after the first's, its vertex indices shifted),
+/// for intersectSelf with split = a.triangles.size().
+template <class S>
+kdet_fcl::TriangleMesh<S> jointMesh(const kdet_fcl::TriangleMesh<S>& a,
+                                    const kdet_fcl::TriangleMesh<S>& b) {
+  kdet_fcl::TriangleMesh<S> m = a;
+  m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
+  const auto shift = static_cast<std::uint32_t>(a.vertices.size());
+  for (kdet_fcl::Triangle t : b.triangles) {
+    for (auto& v : t) v += shift;
+    m.triangles.push_back(t);
+  }
+  return m;
+}
+
+/// A joint result (intersectSelf with split > 0) dealt out: [0] the first mesh's self pairs,
+/// [1] the second's, [2] the pairs across (first's triangle, second's), each in its own mesh's
+/// indices and, from a sorted joint list, in (a, b) order.
+inline std::array<std::vector<kdet_fcl::TrianglePair>, 3> splitJoint(
+    const std::vector<kdet_fcl::TrianglePair>& pairs, std::uint32_t split) {
+  std::array<std::vector<kdet_fcl::TrianglePair>, 3> r;
+  for (const kdet_fcl::TrianglePair& p : pairs) {
+    if (p.b < split) r[0].push_back(p);
+    else if (p.a >= split) r[1].push_back({p.a - split, p.b - split});
+    else r[2].push_back({p.a, p.b - split});
+  }
+  return r;
+}
 
 }  // namespace kdet_bvh

@@ -69,7 +69,7 @@ constexpr int kBuildBlock = 256;
 constexpr int kQueryBlock = 128;
 constexpr int kFilterBlock = 256;
 constexpr std::size_t kMaxCachedMeshes = 32;
-constexpr std::size_t kPairCountWords = 5;  // Context::pair_count
+constexpr std::size_t kPairCountWords = 7;  // Context::pair_count
 
 // ---------------------------------------------------------------------------------------------
 // Build kernels
@@ -462,6 +462,21 @@ __device__ __forceinline__ bool adjacentTriangles(const HashView<S>& M, std::uin
   return adjacent;
 }
 
+/// Two meshes hashed as one (intersectAll): triangles [0, split) are the first mesh's and
+/// [split, n) the second's, and the adjacency rule holds only within a mesh (a pair across the
+/// two is an inter-object pair, which counts when it merely touches). split = 0: one mesh.
+__device__ __forceinline__ bool sameMesh(std::uint32_t split, std::uint32_t i, std::uint32_t j) {
+  return (i < split) == (j < split);
+}
+
+/// The self query's emit rule: a pair of one mesh that shares a vertex is adjacent, not a
+/// candidate.
+template <class S>
+__device__ __forceinline__ bool selfCandidate(const HashView<S>& M, std::uint32_t split,
+                                              std::uint32_t i, std::uint32_t j) {
+  return !sameMesh(split, i, j) || !adjacentTriangles(M, i, j);
+}
+
 /// The query box of B's triangle j in A's frame: its own box when the frames coincide, else the
 /// box of its vertices mapped back into A's frame, grown by a conservative bound on the rounding
 /// of that mapping (from both meshes' bounds, which live on the device: cInfo(0) and cInfo(1)).
@@ -525,7 +540,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
 template <class S, int G, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesKernel(HashView<S> M, std::uint32_t n, bool ordered, int level_skip,
-                         PairSink cand) {
+                         std::uint32_t split, PairSink cand) {
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
   const auto i = static_cast<std::uint32_t>(
       (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G);
@@ -535,7 +550,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       M, cInfo(0), boxOf(M, i), di, ordered, level_skip, tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
-        if (!adjacentTriangles(M, i, j)) emitPair(cand, i, j);
+        if (selfCandidate(M, split, i, j)) emitPair(cand, i, j);
       });
 }
 
@@ -578,8 +593,8 @@ __device__ __forceinline__ void forEachWarpTask(unsigned long long* tasks,
 template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
-                             std::uint32_t max_visit, int level_skip, PairSink cand,
-                             unsigned long long* tasks) {
+                             std::uint32_t max_visit, int level_skip, std::uint32_t split,
+                             PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -602,7 +617,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
           return dj > o.d || (dj == o.d && j > o.id);
         },
         [&](const WarpQuery& o, std::uint32_t j) {
-          if (!adjacentTriangles(M, o.id, j)) emitPair(cand, o.id, j);
+          if (selfCandidate(M, split, o.id, j)) emitPair(cand, o.id, j);
         });
   });
 }
@@ -643,7 +658,7 @@ template <class S, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, 8)
     selfCellPairsKernel(HashView<S> M, const std::uint32_t* __restrict__ block_cell,
                         std::uint32_t cell_cap, std::uint32_t rows, std::uint32_t max_visit,
-                        PairSink cand, unsigned long long* tasks) {
+                        std::uint32_t split, PairSink cand, unsigned long long* tasks) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
   Aabb<S>* const row_box = row_boxes[threadIdx.x >> 5];
@@ -708,7 +723,7 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
         bool overlap;
         if constexpr (std::is_same<S, float>::value) overlap = boxesInFloat(row_box[owner], e);
         else overlap = detail::boxesOverlap(row_box[owner], e);
-        if (overlap && !adjacentTriangles(M, i, j)) emitPair(cand, i < j ? i : j, i < j ? j : i);
+        if (overlap && selfCandidate(M, split, i, j)) emitPair(cand, i < j ? i : j, i < j ? j : i);
       }
       next += cnt;
     }
@@ -791,17 +806,29 @@ __global__ void __launch_bounds__(kQueryBlock)
 }
 
 /// Phase 2 of a self query: pairs sharing a vertex (index or coordinates) are adjacent, not
-/// colliding; the others get the exact test. Emits (min, max).
+/// colliding; the others get the exact test. Emits (min, max). With two meshes hashed as one
+/// (split > 0), a pair across them is never adjacent, and its test takes the first mesh's
+/// triangle first, as intersectMeshes does (the inexact predicates may depend on the order);
+/// each pair is emitted in its own mesh's indices, with its kind in the two bits above the
+/// first index (bit cat_shift: 0 the first mesh's self pair, 1 the second's, 2 across), so
+/// that the sort puts the three lists one after the other (runQuery deals them out).
 template <class S, class K>
 __global__ void __launch_bounds__(kQueryBlock)
     selfExactKernel(const unsigned long long* __restrict__ cand, const unsigned long long* count,
                     unsigned long long capacity, const Vec3<S>* __restrict__ v,
-                    const std::uint32_t* __restrict__ t, PairSink out) {
+                    const std::uint32_t* __restrict__ t, std::uint32_t split, int cat_shift,
+                    PairSink out) {
   const unsigned long long m = *count < capacity ? *count : capacity;
   for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
        k += gridDim.x * blockDim.x) {
     const unsigned long long c = cand[k];
-    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+    auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+    const bool same = sameMesh(split, i, j);
+    if (!same && i > j) {
+      const std::uint32_t x = i;
+      i = j;
+      j = x;
+    }
     const std::uint32_t ti[3] = {t[3 * i], t[3 * i + 1], t[3 * i + 2]};
     const std::uint32_t tj[3] = {t[3 * j], t[3 * j + 1], t[3 * j + 2]};
     const Vec3<S> vi[3] = {v[ti[0]], v[ti[1]], v[ti[2]]};
@@ -809,9 +836,17 @@ __global__ void __launch_bounds__(kQueryBlock)
     bool adjacent = false;
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b] || vi[a] == vj[b];
+    adjacent = adjacent && same;
     if (!adjacent &&
-        detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2]))
-      emitPair(out, i < j ? i : j, i < j ? j : i);
+        detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2])) {
+      std::uint32_t a = i < j ? i : j, b = i < j ? j : i;
+      if (split > 0 && b >= split) {  // the second mesh's own pair, or one across
+        const std::uint32_t cat = a >= split ? 1u : 2u;
+        a = (cat << cat_shift) | (cat == 1u ? a - split : a);
+        b -= split;
+      }
+      emitPair(out, a, b);
+    }
   }
 }
 
@@ -859,14 +894,32 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
   }
 }
 
+/// Adds `by` to n vertex indices: the second mesh's triangles of two meshes hashed as one.
+__global__ void shiftIndicesKernel(std::uint32_t n, std::uint32_t by, std::uint32_t* t) {
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k < n) t[k] += by;
+}
+
 /// Sorted keys -> TrianglePair layout {a, b} (two 32-bit words), in place of the unsorted keys.
+/// With `kinds` (two meshes hashed as one: the pair's kind in the bits of a from a_bits up,
+/// selfExactKernel), also counts the pairs of kinds 1 and 2 into kinds[0] and kinds[1] and
+/// clears the kind from a: the host knows where each kind's run starts from the counts.
 __global__ void unpackPairsKernel(std::uint32_t m, const unsigned long long* __restrict__ keys,
-                                  int b_bits, uint2* __restrict__ out) {
+                                  int b_bits, uint2* __restrict__ out, int a_bits,
+                                  unsigned long long* kinds) {
   const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
   if (k >= m) return;
   const unsigned long long u = keys[k];
-  out[k] = make_uint2(static_cast<unsigned int>(u >> b_bits),
-                      static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
+  const auto a = static_cast<unsigned int>(u >> b_bits);
+  const unsigned int a_mask = kinds != nullptr ? (1u << a_bits) - 1 : ~0u;
+  out[k] = make_uint2(a & a_mask, static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
+  if (kinds != nullptr) {
+    // The keys are sorted, so a warp's lanes mostly share one kind: one atomic per kind.
+    const unsigned int kind = a >> a_bits;
+    const unsigned int peers = __match_any_sync(__activemask(), kind);
+    if (kind != 0 && (threadIdx.x & 31u) == static_cast<unsigned int>(__ffs(peers) - 1))
+      atomicAdd(kinds + (kind - 1), static_cast<unsigned long long>(__popc(peers)));
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -912,15 +965,37 @@ class PinnedBuffer {
 };
 
 /// One HashedMesh's device state.
+/// What a cache entry holds on the device: one mesh, or two hashed as one (intersectAll): the
+/// second's vertices follow the first's, its triangles follow the first's with their vertex
+/// indices shifted by the first's vertex count.
+template <class S>
+struct MeshSource {
+  const TriangleMesh<S>* part[2] = {nullptr, nullptr};
+  std::size_t nv() const {
+    return (part[0] ? part[0]->vertices.size() : 0) + (part[1] ? part[1]->vertices.size() : 0);
+  }
+  std::size_t nt() const {
+    return (part[0] ? part[0]->triangles.size() : 0) + (part[1] ? part[1]->triangles.size() : 0);
+  }
+};
+template <class S>
+MeshSource<S> sourceOf(const TriangleMesh<S>* first, const TriangleMesh<S>* second = nullptr) {
+  MeshSource<S> src;
+  src.part[0] = first;
+  src.part[1] = second;
+  return src;
+}
+
 template <class S>
 struct CachedMesh {
   const void* owner = nullptr;
-  std::uint64_t version = 0;
+  const void* owner2 = nullptr;  // the second mesh of two hashed as one (else nullptr)
+  std::uint64_t version = 0, version2 = 0;
   std::uint64_t fingerprint = 0;
   std::size_t nv = 0, nt = 0;
   bool valid = false;  // false: the next use rebuilds
   bool force_vertices = false;
-  std::vector<Triangle> host_tris;  // what the device triangles hold (topology check)
+  std::vector<Triangle> host_tris;  // what the device triangles hold, unshifted (topology check)
 
   DeviceBuffer<Vec3<S>> v;
   DeviceBuffer<std::uint32_t> t;
@@ -1024,8 +1099,8 @@ struct Context {
   DeviceBuffer<Vec3<float>> mapped_f;
   DeviceBuffer<Vec3<double>> mapped_d;
   // pair_count: the candidate, pair and survivor counters, the task counter of the warp-wide
-  // candidate kernels (warpTasks()) and that of the same-level pairs (cellTasks()); zeroed before
-  // every pass.
+  // candidate kernels (warpTasks()), that of the same-level pairs (cellTasks()) and the pair
+  // counts of two kinds of a joint query (kindCounts()); zeroed before every pass.
   DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;
   PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + 3 pair counts + cell cands
   PinnedBuffer readback;    // sorted pairs on their way into the result
@@ -1057,8 +1132,10 @@ struct Context {
   unsigned long long* hostCells() { return hostTotal() + 1; }
   unsigned long long* hostCount() { return hostTotal() + 2; }
   unsigned long long* hostCellCandidates() { return hostTotal() + 5; }
+  unsigned long long* hostKinds() { return hostTotal() + 6; }  // 2 words (unpackPairsKernel)
   unsigned long long* warpTasks() { return pair_count.data() + 3; }
   unsigned long long* cellTasks() { return pair_count.data() + 4; }
+  unsigned long long* kindCounts() { return pair_count.data() + 5; }  // 2 words
 
   /// Drops all device memory without throwing (after a CUDA error, or on request): the next
   /// call re-uploads what it needs.
@@ -1458,10 +1535,10 @@ bool warpScan();
 ///   anything did not fit, rebuilds this way with read-backs and reruns. Such a re-hash runs
 ///   as a CUDA graph (rehashFromGraph), unless KDET_FCL_CUDA_REHASH_GRAPH=0.
 template <class S>
-void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool upload_tris,
+void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upload_tris,
              bool try_async) {
   const cudaStream_t s = ctx.stream;
-  const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  const std::size_t nv = mesh.nv(), nt = mesh.nt();
   static_assert(150000000u <= kEntryTriMask, "triangle indices must fit beside the first-cell bits");
   if (nt > 150000000u)
     throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(nt) +
@@ -1472,10 +1549,28 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool u
   m.staging.reserve(vbytes + tbytes);
   char* stage = static_cast<char*>(m.staging.data());
   m.v.reserve(nv, false);
-  CUDA_TRY(staging::stagedUpload(m.v.data(), mesh.vertices.data(), vbytes, stage, s));
-  if (upload_tris) {
-    m.t.reserve(3 * nt, false);
-    CUDA_TRY(staging::stagedUpload(m.t.data(), mesh.triangles.data(), tbytes, stage + vbytes, s));
+  if (upload_tris) m.t.reserve(3 * nt, false);
+  // Each part's vertices (and triangles) go to their place in the arrays, through their own part
+  // of the stage; the second part's vertex indices are then shifted past the first's vertices.
+  std::size_t v_at = 0, t_at = 0;
+  for (const TriangleMesh<S>* part : mesh.part) {
+    if (part == nullptr) continue;
+    const std::size_t pv = part->vertices.size(), pt = part->triangles.size();
+    CUDA_TRY(staging::stagedUpload(m.v.data() + v_at, part->vertices.data(), pv * sizeof(Vec3<S>),
+                                   stage + v_at * sizeof(Vec3<S>), s));
+    if (upload_tris) {
+      CUDA_TRY(staging::stagedUpload(m.t.data() + 3 * t_at, part->triangles.data(),
+                                     pt * sizeof(Triangle),
+                                     stage + vbytes + t_at * sizeof(Triangle), s));
+      if (v_at > 0 && pt > 0) {
+        shiftIndicesKernel<<<blocksFor(3 * pt, 256), 256, 0, s>>>(
+            static_cast<std::uint32_t>(3 * pt), static_cast<std::uint32_t>(v_at),
+            m.t.data() + 3 * t_at);
+        checkLaunch();
+      }
+    }
+    v_at += pv;
+    t_at += pt;
   }
   m.nv = nv;
   m.nt = nt;
@@ -1506,7 +1601,7 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh, bool u
 /// `host` with the pass's counts, shows that an array was too small or the keys outgrew the
 /// compact sort is rebuilt with read-backs. Returns true when it was (the query must rerun).
 template <class S>
-bool checkPending(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh,
+bool checkPending(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh,
                   const BuildInfo& host) {
   if (!m.pending) return false;
   m.pending = false;
@@ -1518,34 +1613,50 @@ bool checkPending(Context& ctx, CachedMesh<S>& m, const TriangleMesh<S>& mesh,
   return true;
 }
 
-/// The cache entry of `hm`, brought up to date: nothing happens for a mesh whose geometry did not
-/// change (rigid motion only changes the pose, which the query uploads); a new version uploads
-/// the vertices and re-hashes; changed triangles are uploaded too.
+/// The cache entry of `hm` (or of `hm` and `hm2` hashed as one), brought up to date: nothing
+/// happens for meshes whose geometry did not change (rigid motion only changes the pose, which
+/// the query uploads); a new version uploads the vertices and re-hashes; changed triangles are
+/// uploaded too.
 template <class S>
-CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm) {
+CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm, const HashedMesh<S>* hm2 = nullptr) {
   auto& list = ctx.meshes(static_cast<S*>(nullptr));
-  const TriangleMesh<S>& mesh = hm.mesh();
-  const std::uint64_t fp = fingerprintOf(mesh);
-  auto it = std::find_if(list.begin(), list.end(),
-                         [&](const CachedMesh<S>& c) { return c.owner == &hm; });
+  const MeshSource<S> src = sourceOf(&hm.mesh(), hm2 ? &hm2->mesh() : nullptr);
+  std::uint64_t fp = fingerprintOf(hm.mesh());
+  if (hm2) fp = fp * 1099511628211ull ^ fingerprintOf(hm2->mesh());
+  const std::uint64_t v2 = hm2 ? hm2->version() : 0;
+  auto it = std::find_if(list.begin(), list.end(), [&](const CachedMesh<S>& c) {
+    return c.owner == &hm && c.owner2 == hm2;
+  });
   if (it != list.end()) {
     list.splice(list.begin(), list, it);  // most recently used first
   } else {
     list.emplace_front();
     list.front().owner = &hm;
+    list.front().owner2 = hm2;
   }
   CachedMesh<S>& m = list.front();
-  if (m.valid && !m.force_vertices && m.version == hm.version() && m.fingerprint == fp) return m;
-  // markDeformed() with an unchanged version: only the vertices can have moved. Otherwise the
+  const bool same_ids = m.version == hm.version() && m.version2 == v2 && m.fingerprint == fp;
+  if (m.valid && !m.force_vertices && same_ids) return m;
+  // markDeformed() with unchanged versions: only the vertices can have moved. Otherwise the
   // triangles are compared on the host (cheaper than uploading them again).
-  const bool only_vertices = m.valid && m.force_vertices && m.version == hm.version() &&
-                             m.fingerprint == fp;
-  const bool same_topology = only_vertices || (m.nt == mesh.triangles.size() &&
-                                               m.t.data() != nullptr && m.host_tris == mesh.triangles);
+  const bool only_vertices = m.valid && m.force_vertices && same_ids;
+  auto sameTriangles = [&] {
+    if (m.nt != src.nt() || m.host_tris.size() != src.nt() || m.t.data() == nullptr) return false;
+    const std::vector<Triangle>& t0 = src.part[0]->triangles;
+    if (!std::equal(t0.begin(), t0.end(), m.host_tris.begin())) return false;
+    return hm2 == nullptr || std::equal(hm2->mesh().triangles.begin(), hm2->mesh().triangles.end(),
+                                        m.host_tris.begin() + t0.size());
+  };
+  const bool same_topology = only_vertices || sameTriangles();
   m.valid = false;
-  rebuild(ctx, m, mesh, !same_topology, same_topology);
-  if (!same_topology) m.host_tris = mesh.triangles;
+  rebuild(ctx, m, src, !same_topology, same_topology);
+  if (!same_topology) {
+    m.host_tris = hm.mesh().triangles;
+    if (hm2) m.host_tris.insert(m.host_tris.end(), hm2->mesh().triangles.begin(),
+                                hm2->mesh().triangles.end());
+  }
   m.version = hm.version();
+  m.version2 = v2;
   m.fingerprint = fp;
   m.force_vertices = false;
   m.valid = true;
@@ -1575,10 +1686,17 @@ bool planeFilterOn() {
 
 /// Runs `launch(cand, survivors, out)` (it returns whether the plane filter ran) until every pair
 /// fits (overflow: grow, rerun), then sorts the pairs on the
-/// device and copies the first max_pairs (or all) of the sorted order into the result.
+/// device and copies the first max_pairs (or all) of the sorted order into the result. With
+/// `parts` (two meshes hashed as one, the first's triangles below `split`; max_pairs 0), the
+/// pairs carry their kind in the two bits above the first index's a_bits (selfExactKernel), the
+/// sort covers those bits too, so the three kinds come as three runs, whose lengths the unpack
+/// counts; the runs are dealt out as they arrive: parts[0] gets the first mesh's own pairs,
+/// parts[1] the second's and parts[2] those across, each in its own mesh's indices and in (a, b)
+/// order, as the three separate queries give them.
 template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
-                     std::size_t work, const QueryOptions& options) {
+                     std::size_t work, const QueryOptions& options, std::uint32_t split = 0,
+                     QueryResult* parts = nullptr) {
   const cudaStream_t s = ctx.stream;
   ctx.cands.reserve(std::max<std::size_t>(std::size_t(1) << 16, 8 * work));
   ctx.pairs.reserve(std::max<std::size_t>(std::size_t(1) << 16, work));
@@ -1639,25 +1757,55 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   if (n > 0) {
     ctx.pairs_sorted.reserve(n);
     cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
-    const int bits = a_bits + b_bits;
+    const int bits = a_bits + b_bits + (parts != nullptr ? 2 : 0);
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
       return cub::DeviceRadixSort::SortKeys(tmp, bytes, keys, static_cast<int>(n), 0, bits, s);
     });
     const unsigned long long* out = keys.Current();
     unsigned long long* in = keys.Alternate();  // receives the unpacked pairs
-    unpackPairsKernel<<<blocksFor(m, 256), 256, 0, s>>>(static_cast<std::uint32_t>(m), out, b_bits,
-                                                         reinterpret_cast<uint2*>(in));
+    unpackPairsKernel<<<blocksFor(m, 256), 256, 0, s>>>(
+        static_cast<std::uint32_t>(m), out, b_bits, reinterpret_cast<uint2*>(in), a_bits,
+        parts != nullptr ? ctx.kindCounts() : nullptr);
     checkLaunch();
+    // The kinds' counts arrive before the first chunk of pairs (same stream), so that the three
+    // results are sized exactly, as a single query's is.
+    if (parts != nullptr)
+      CUDA_TRY(cudaMemcpyAsync(ctx.hostKinds(), ctx.kindCounts(), 2 * sizeof(unsigned long long),
+                               cudaMemcpyDeviceToHost, s));
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
     // Through pinned memory (a pageable device->host copy runs at a fraction of the bus rate),
     // in chunks, each appended to the result as soon as it has arrived (staged_upload.h).
     ctx.readback.reserve(m * sizeof(TrianglePair));
-    res.pairs.reserve(m);
-    CUDA_TRY(staging::stagedDownload(reinterpret_cast<const TrianglePair*>(in), m,
-                                     static_cast<TrianglePair*>(ctx.readback.data()), s,
-                                     [&](const TrianglePair* first, std::size_t k) {
-                                       res.pairs.insert(res.pairs.end(), first, first + k);
-                                     }));
+    auto* const from = reinterpret_cast<const TrianglePair*>(in);
+    auto* const stage = static_cast<TrianglePair*>(ctx.readback.data());
+    if (parts == nullptr) {
+      res.pairs.reserve(m);
+      CUDA_TRY(staging::stagedDownload(from, m, stage, s,
+                                       [&](const TrianglePair* first, std::size_t k) {
+                                         res.pairs.insert(res.pairs.end(), first, first + k);
+                                       }));
+    } else {
+      std::size_t at = 0, end0 = 0, end1 = 0;  // the next pair's index; the runs' ends
+      CUDA_TRY(staging::stagedDownload(from, m, stage, s, [&](const TrianglePair* first,
+                                                              std::size_t k) {
+        if (at == 0) {  // the counts arrived before the first chunk
+          const std::size_t k1 = ctx.hostKinds()[0], k2 = ctx.hostKinds()[1];
+          end1 = m - std::min<std::size_t>(m, k2);
+          end0 = end1 - std::min<std::size_t>(end1, k1);
+          parts[0].pairs.reserve(end0);
+          parts[1].pairs.reserve(end1 - end0);
+          parts[2].pairs.reserve(m - end1);
+        }
+        for (std::size_t e = 0; e < k;) {
+          const std::size_t i = at + e;
+          const int kind = i < end0 ? 0 : i < end1 ? 1 : 2;
+          const std::size_t stop = std::min(k, (kind == 0 ? end0 : kind == 1 ? end1 : m) - at);
+          parts[kind].pairs.insert(parts[kind].pairs.end(), first + e, first + stop);
+          e = stop;
+        }
+        at += k;
+      }));
+    }
   }
   ctx.record(3);
   res.complete = options.max_pairs == 0 || res.pairs.size() < options.max_pairs;
@@ -1936,7 +2084,7 @@ template <class S>
 struct PendingBuilds {
   Context& ctx;
   CachedMesh<S>* m[2];
-  const TriangleMesh<S>* mesh[2];
+  MeshSource<S> mesh[2];
   void enqueue() {
     for (int k = 0; k < 2; ++k)
       if (m[k] != nullptr && m[k]->pending)
@@ -1947,7 +2095,7 @@ struct PendingBuilds {
     bool again = false;
     for (int k = 0; k < 2; ++k)
       if (m[k] != nullptr && m[k]->pending)
-        again = checkPending(ctx, *m[k], *mesh[k], *ctx.hostInfo(1 + k)) || again;
+        again = checkPending(ctx, *m[k], mesh[k], *ctx.hostInfo(1 + k)) || again;
     return again;
   }
 };
@@ -2031,27 +2179,19 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     });
     return filter;
   };
-  PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B}, {&a.mesh(), &b.mesh()}};
+  PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
+                           {sourceOf(&a.mesh()), sourceOf(&b.mesh())}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb, options);
   A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
   return res;
 }
 
+/// The self query of the cache entry M (its event 0 recorded before M was acquired): the pairs of
+/// one mesh, or (split > 0, `parts`) of two meshes hashed as one, dealt out by runQuery.
 template <class S>
-QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions& options) {
-  const std::size_t n = mesh.numTriangles();
-  ctx.profile = QueryProfile{};
-  if (n < 2) return QueryResult{};
-  ctx.record(0);
-  CachedMesh<S>& M = acquire(ctx, mesh);
-  detail::KeptSelfResult::Ticket ticket;
-  QueryResult kept;
-  if (M.kept_self.find(M.builds, options, &kept, &ticket)) {
-    ctx.profile = QueryProfile{};  // nothing ran on the device
-    ctx.profile.self_cached = true;
-    ctx.profile.pairs = kept.pairs.size();
-    return kept;
-  }
+QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
+                      std::uint32_t split, QueryResult* parts, const QueryOptions& options) {
+  const std::size_t n = M.nt;
   ctx.record(1);
   const cudaStream_t s = ctx.stream;
   const auto un = static_cast<std::uint32_t>(n);
@@ -2077,7 +2217,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
           kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
       kernel<<<blocks, kQueryBlock, 0, s>>>(mv, M.block_cell.data(),
                                             M.pending ? M.pending_cell_cap : M.cell_cap, rows,
-                                            warpVisit(), cand, ctx.cellTasks());
+                                            warpVisit(), split, cand, ctx.cellTasks());
       checkLaunch();
       if (ctx.profiling)  // the candidates so far are the cells' (QueryProfile::cell_candidates)
         CUDA_TRY(cudaMemcpyAsync(ctx.hostCellCandidates(), cand.count, sizeof(unsigned long long),
@@ -2090,8 +2230,8 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
       ctx.profile.warp_lanes = 1 << log_p;
       const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
       const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, warps);
-      kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip, cand,
-                                               wl.tasks);
+      kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip, split,
+                                               cand, wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -2099,7 +2239,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
         const auto kernel =
             spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
         kernel<<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, M.size_ordered,
-                                                                     level_skip, cand);
+                                                                     level_skip, split, cand);
       });
     }
     checkLaunch();
@@ -2112,29 +2252,68 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
     ctx.record(5);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
-      selfExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(in.pairs, in.count,
-                                                                  in.capacity, mv.v, mv.t, out);
+      selfExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
+          in.pairs, in.count, in.capacity, mv.v, mv.t, split, bitsFor(n), out);
     });
     return filter;
   };
-  PendingBuilds<S> pending{ctx, {&M, nullptr}, {&mesh.mesh(), nullptr}};
+  PendingBuilds<S> pending{ctx, {&M, nullptr}, {src, MeshSource<S>{}}};
   *ctx.hostCellCandidates() = 0;
-  QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, options);
+  QueryResult res =
+      runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, options, split, parts);
   ctx.profile.cell_candidates = *ctx.hostCellCandidates();  // (0 unless profiling)
   M.self_density = double(ctx.profile.candidates) / double(n);
+  return res;
+}
+
+template <class S>
+QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions& options) {
+  const std::size_t n = mesh.numTriangles();
+  ctx.profile = QueryProfile{};
+  if (n < 2) return QueryResult{};
+  ctx.record(0);
+  CachedMesh<S>& M = acquire(ctx, mesh);
+  detail::KeptSelfResult::Ticket ticket;
+  QueryResult kept;
+  if (M.kept_self.find(M.builds, options, &kept, &ticket)) {
+    ctx.profile = QueryProfile{};  // nothing ran on the device
+    ctx.profile.self_cached = true;
+    ctx.profile.pairs = kept.pairs.size();
+    return kept;
+  }
+  QueryResult res = selfQuery(ctx, M, sourceOf(&mesh.mesh()), 0, nullptr, options);
   M.kept_self.offer(ticket, options, res);
   return res;
 }
 
+/// intersectAll with both meshes hashed as one (see cuda::intersectAll): one build, one self
+/// query whose pairs across the two meshes are the inter-object pairs.
+template <class S>
+AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
+                         const QueryOptions& options) {
+  ctx.profile = QueryProfile{};
+  AllPairsResult r;
+  ctx.record(0);
+  CachedMesh<S>& M = acquire(ctx, a, &b);
+  QueryResult parts[3];
+  selfQuery(ctx, M, sourceOf(&a.mesh(), &b.mesh()), static_cast<std::uint32_t>(a.numTriangles()),
+            parts, options);
+  ctx.profile.joint = true;
+  r.self_a = std::move(parts[0]);
+  r.self_b = std::move(parts[1]);
+  r.inter = std::move(parts[2]);
+  return r;
+}
+
 /// Serialises, initialises, and on a CUDA error drops every device buffer before rethrowing.
 template <class F>
-QueryResult guarded(F&& f) {
+auto guarded(F&& f) -> decltype(f(std::declval<Context&>())) {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
   try {
     ctx.init();
     if (g_num_sms == 0) CUDA_TRY(cudaDeviceGetAttribute(&g_num_sms, cudaDevAttrMultiProcessorCount, 0));
-    QueryResult r = f(ctx);
+    auto r = f(ctx);
     evict<float>(ctx);
     evict<double>(ctx);
     return r;
@@ -2162,6 +2341,23 @@ QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options
   return guarded([&](Context& ctx) { return selfImpl(ctx, mesh, options); });
 }
 
+template <class S>
+AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options) {
+  // One hash for both when that gives exactly the three queries' pairs: the inter query would
+  // decide on both meshes' own coordinates (poses that map one frame onto the other exactly),
+  // every pair is asked for, and both meshes have triangles.
+  const bool joint = options.max_pairs == 0 && a.numTriangles() > 0 && b.numTriangles() > 0 &&
+                     detail::relativePose(a.pose(), b.pose()).identity &&
+                     !envFlag0("KDET_FCL_CUDA_JOINT");
+  if (joint) return guarded([&](Context& ctx) { return jointImpl(ctx, a, b, options); });
+  AllPairsResult r;
+  r.self_a = cuda::intersectSelf(a, options);
+  r.self_b = cuda::intersectSelf(b, options);
+  r.inter = cuda::intersectMeshes(a, b, options);
+  return r;
+}
+
 void setProfiling(bool on) {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
@@ -2179,7 +2375,7 @@ void markDeformed(const HashedMesh<S>& mesh) {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr)))
-    if (m.owner == &mesh) m.force_vertices = true;
+    if (m.owner == &mesh || m.owner2 == &mesh) m.force_vertices = true;
 }
 
 std::string deviceMemoryReport() {
@@ -2237,6 +2433,10 @@ template QueryResult intersectMeshes(const HashedMesh<double>&, const HashedMesh
                                      const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<float>&, const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<double>&, const QueryOptions&);
+template AllPairsResult intersectAll(const HashedMesh<float>&, const HashedMesh<float>&,
+                                     const QueryOptions&);
+template AllPairsResult intersectAll(const HashedMesh<double>&, const HashedMesh<double>&,
+                                     const QueryOptions&);
 template void markDeformed(const HashedMesh<float>&);
 template void markDeformed(const HashedMesh<double>&);
 

@@ -86,6 +86,20 @@ QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options);
 
+/// intersectAll() on device 0. When every pair is asked for (max_pairs 0), both meshes have
+/// triangles and the inter query would decide on both meshes' own coordinates (their poses map
+/// one frame onto the other exactly: detail::relativePose's identity, e.g. two deforming meshes
+/// in world coordinates), both are hashed as one: a cache entry of their own holds the second
+/// mesh's vertices after the first's (its triangles' indices shifted), one build and one self
+/// query find every pair, the adjacency rule applies only within a mesh, and the sorted pairs
+/// are dealt out to the three results as they arrive (QueryProfile::joint). The pair sets and
+/// their order are those of the three separate queries, for every predicate. Such a joint query
+/// keeps no self result (QueryResult::kept): for rigid meshes whose selfs are kept, the three
+/// queries cost less. KDET_FCL_CUDA_JOINT=0 runs the three queries (read at every call).
+template <class S>
+AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options);
+
 /// Device-side times of the last GPU query (CUDA events), for the benchmarks. Recorded only while
 /// setProfiling(true); all zero otherwise.
 struct QueryProfile {
@@ -117,6 +131,8 @@ struct QueryProfile {
   int cell_rows = 0;  ///< entries per warp task of the cells' pairs (KDET_FCL_CUDA_CELL_ROWS)
   bool self_cached = false;  ///< a self query answered from the kept result of an unchanged mesh
                              ///< (no device work, all times 0; KDET_FCL_CUDA_SELF_CACHE=0: never)
+  bool joint = false;  ///< intersectAll hashed both meshes as one and ran one self query
+                       ///< (KDET_FCL_CUDA_JOINT)
 };
 void setProfiling(bool on);
 QueryProfile lastQueryProfile();

@@ -161,6 +161,40 @@ TEST(CudaBvh, SoupSelfSkipsEqualCoordinatesAndTinyMeshes) {
   EXPECT_EQ(kdet_bvh::intersect(g1, I, g1, I), (std::vector<TrianglePair>{{0, 0}}));
 }
 
+TYPED_TEST(CudaBvhTyped, TwoMeshesInOneTreeGiveBothSelfsAndTheInterPairs) {
+  // The benchmark's joint form of the baseline (as kdet_fcl::intersectAll): two meshes in one
+  // tree, one self query with split = the first's triangle count. Dealt out, it must give each
+  // mesh's self pairs and the inter pairs. A sphere and its exact copy share every coordinate
+  // across the meshes: those touching pairs count as inter pairs, which the plain self query
+  // of the same tree drops as adjacent; its kept result must not be confused with the split one.
+  KDET_SKIP_WITHOUT_DEVICE();
+  using S = TypeParam;
+  const Transform<S> I = Transform<S>::identity();
+  const TriangleMesh<S> f0 = makeDrapedCloth<S>(50, S(4), S(1), S(0.03), S(0.8));
+  const TriangleMesh<S> f1 = makeDrapedCloth<S>(50, S(4), S(1), S(0.03), S(0.85));
+  const TriangleMesh<S> ball = makeSphere<S>({0, 0, 0}, S(1), 20, 10);
+  struct Case {
+    const char* what;
+    const TriangleMesh<S>& a;
+    const TriangleMesh<S>& b;
+  };
+  for (const Case& c : {Case{"cloth frames", f0, f1}, Case{"sphere and its copy", ball, ball}}) {
+    kdet_bvh::GpuBvh<S> g;
+    g.setMesh(kdet_bvh::jointMesh(c.a, c.b));
+    const auto split = static_cast<std::uint32_t>(c.a.triangles.size());
+    const auto plain = kdet_bvh::intersectSelf(g);  // run twice: the second is kept
+    EXPECT_EQ(kdet_bvh::intersectSelf(g), plain) << c.what;
+    const auto parts = kdet_bvh::splitJoint(kdet_bvh::intersectSelf(g, Predicate::Exact, split),
+                                            split);
+    EXPECT_EQ(parts[0], cpuSelf(c.a)) << c.what;
+    EXPECT_EQ(parts[1], cpuSelf(c.b)) << c.what;
+    EXPECT_EQ(parts[2], cpuInter(c.a, I, c.b, I)) << c.what;
+    EXPECT_FALSE(parts[2].empty()) << c.what;
+    if (&c.a == &c.b) EXPECT_LT(plain.size(), parts[2].size()) << c.what;
+    else EXPECT_FALSE(parts[0].empty() || parts[1].empty()) << c.what;
+  }
+}
+
 TEST(CudaBvh, UncClothBallFramesMatchKdetGpuAndCpu) {
   KDET_SKIP_WITHOUT_DEVICE();
   const std::string f92 = sharedData("unc/cloth-ball/cloth_ball92.ply");

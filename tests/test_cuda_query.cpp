@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <iostream>
 #include <filesystem>
@@ -676,6 +677,111 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
         }
       }
     }
+  }
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, IntersectAllHashesTwoMeshesAsOneWithTheThreeQueriesPairs) {
+  // intersectAll(a, b) on the GPU hashes both meshes as one and runs one self query when the
+  // inter query would decide on both meshes' own coordinates (relative pose the exact identity:
+  // identity poses, or the same translation) and every pair is asked for. It must give the
+  // pairs, in the order, of intersectSelf(a), intersectSelf(b) and intersectMeshes(a, b) on the
+  // GPU, for every predicate, and the CPU's for the exact one. Scenes: two frames of a draped
+  // cloth (all three sets non-empty); a sphere and an exact copy of it, whose triangles share
+  // coordinates across the meshes: every such pair touches, and the self query's adjacency rule
+  // must not drop it; two soups of many sizes (pairs across levels); one mesh on both sides.
+  // Then the joint entry follows deformation (re-hash, markDeformed) and a topology change, a
+  // forced output overflow, the tile scan and the cells' pairs; and the three queries run instead
+  // for a rotated pose, max_pairs, an empty mesh and KDET_FCL_CUDA_JOINT=0.
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  cuda::setProfiling(true);
+  auto check = [](const HashedMesh<S>& a, const HashedMesh<S>& b, bool joint,
+                  const std::string& what, Predicate pred = Predicate::Exact,
+                  std::size_t max_pairs = 0) {
+    const QueryOptions o = on(Backend::Cuda, max_pairs, pred);
+    const AllPairsResult all = intersectAll(a, b, o);
+    const bool ran_joint = cuda::lastQueryProfile().joint;
+    EXPECT_EQ(ran_joint, joint) << what;
+    EXPECT_EQ(all.self_a.pairs, intersectSelf(a, o).pairs) << what << ": self a";
+    EXPECT_EQ(all.self_b.pairs, intersectSelf(b, o).pairs) << what << ": self b";
+    EXPECT_EQ(all.inter.pairs, intersectMeshes(a, b, o).pairs) << what << ": inter";
+    if (pred == Predicate::Exact && max_pairs == 0) {
+      const QueryOptions c = on(Backend::Cpu, 0, pred);
+      EXPECT_EQ(all.self_a.pairs, sorted(intersectSelf(a, c).pairs)) << what << ": CPU self a";
+      EXPECT_EQ(all.self_b.pairs, sorted(intersectSelf(b, c).pairs)) << what << ": CPU self b";
+      EXPECT_EQ(all.inter.pairs, sorted(intersectMeshes(a, b, c).pairs)) << what << ": CPU inter";
+    }
+    if (max_pairs == 0)
+      EXPECT_TRUE(all.self_a.complete && all.self_b.complete && all.inter.complete) << what;
+    return std::array<std::size_t, 3>{all.self_a.pairs.size(), all.self_b.pairs.size(),
+                                      all.inter.pairs.size()};
+  };
+  HashedMesh<S> f0(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.8)));
+  HashedMesh<S> f1(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.85)));
+  HashedMesh<S> ball(makeSphere<S>({0, 0, 0}, S(1), 24, 12));
+  HashedMesh<S> copy(ball.mesh());
+  HashedMesh<S> soup_a(makeRandomSoup<S>(3000, 2, S(1e-3), S(0.3), 3));
+  HashedMesh<S> soup_b(makeRandomSoup<S>(2000, 2, S(1e-3), S(0.5), 4));
+  for (Predicate pred : {Predicate::Exact, Predicate::Double, Predicate::Float}) {
+    const std::string p = " (predicate " + std::to_string(int(pred)) + ")";
+    const auto frames = check(f0, f1, true, "cloth frames" + p, pred);
+    EXPECT_GT(frames[0], 0u);
+    EXPECT_GT(frames[1], 0u);
+    EXPECT_GT(frames[2], 0u);
+    const auto copies = check(ball, copy, true, "sphere and its copy" + p, pred);
+    EXPECT_EQ(copies[0], 0u);
+    EXPECT_GT(copies[2], ball.numTriangles());  // every triangle touches its twin and neighbours
+    const auto soups = check(soup_a, soup_b, true, "soups" + p, pred);
+    EXPECT_GT(soups[0] + soups[1], 0u);
+    EXPECT_GT(soups[2], 0u);
+    check(ball, ball, true, "one mesh on both sides" + p, pred);
+  }
+  // The same translation on both: the relative pose is exactly the identity.
+  Transform<S> shift;
+  shift.t = Vec3<S>{S(1.5), S(-2), S(0.25)};
+  soup_a.setPose(shift);
+  soup_b.setPose(shift);
+  check(soup_a, soup_b, true, "soups, both shifted");
+  // Deformation (a device re-hash of the joint entry), markDeformed, a topology change.
+  f1.updateVertices(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.9)).vertices);
+  check(f0, f1, true, "second frame moved");
+  cuda::markDeformed(f0);
+  check(f0, f1, true, "first frame marked deformed");
+  TriangleMesh<S> torn = f0.mesh();
+  torn.triangles.resize(torn.triangles.size() / 2);
+  f0.setMesh(torn);
+  check(f0, f1, true, "first frame torn in half");
+  {
+    kdet_test::ScopedEnv cap("KDET_FCL_CUDA_PAIR_CAPACITY", "7");
+    check(f0, f1, true, "forced output overflow");
+  }
+  {
+    kdet_test::ScopedEnv cells("KDET_FCL_CUDA_SELF_CELLS", "1");
+    check(f0, f1, true, "cells' pairs");
+    check(ball, copy, true, "sphere and its copy, cells' pairs");
+  }
+  {
+    kdet_test::ScopedEnv cells("KDET_FCL_CUDA_SELF_CELLS", "0");
+    check(ball, copy, true, "sphere and its copy, no cells' pairs");
+  }
+  {
+    kdet_test::ScopedEnv tile("KDET_FCL_CUDA_SCAN", "tile");
+    cuda::markDeformed(f1);
+    check(f0, f1, true, "tile scan");
+  }
+  // The three queries instead.
+  soup_a.setPose(Transform<S>());
+  soup_b.setPose(makeTransform<S>({S(0.6), S(0), S(0.8)}, S(0.05), {S(0.01), S(0), S(0)}));
+  EXPECT_GT(check(soup_a, soup_b, false, "soups, b rotated")[2], 0u);
+  check(f0, f1, false, "max_pairs 5", Predicate::Exact, 5);
+  HashedMesh<S> empty{TriangleMesh<S>()};
+  check(f0, empty, false, "empty second mesh");
+  {
+    kdet_test::ScopedEnv off("KDET_FCL_CUDA_JOINT", "0");
+    check(f0, f1, false, "KDET_FCL_CUDA_JOINT=0");
   }
   cuda::setProfiling(false);
 #endif

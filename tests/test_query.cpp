@@ -265,6 +265,39 @@ TEST(Query, SelfCollisionSkipsVertexSharingPairsInSoups) {
   EXPECT_EQ(got, bruteForceIntersectSelf(soup));
 }
 
+TEST(Query, IntersectAllGivesEachSelfAndTheInterPairs) {
+  // Two strips that touch along one edge's coordinates: within a strip the shared edge makes its
+  // triangles adjacent (no pair), across the strips the touch is a pair. A third triangle
+  // pierces strip a. intersectAll must give the three queries' pairs (checked against brute
+  // force), also with max_pairs, and throw the same typed error as they do for a missing device.
+  TriangleMesh<double> a, b;
+  a.addTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  a.addTriangle({1, 0, 0}, {1, 1, 0}, {0, 1, 0});
+  a.addTriangle({0.5, 0.2, -1}, {0.6, 0.8, 1}, {0.4, 0.5, 1});
+  b.addTriangle({1, 0, 0}, {2, 0, 0}, {1, 1, 0});
+  b.addTriangle({2, 0, 0}, {2, 1, 0}, {1, 1, 0});
+  const HashedMesh<double> ha(a), hb(b);
+  const AllPairsResult all = intersectAll(ha, hb);
+  EXPECT_EQ(sorted(all.self_a.pairs), bruteForceIntersectSelf(a));
+  EXPECT_EQ(sorted(all.self_b.pairs), bruteForceIntersectSelf(b));
+  EXPECT_EQ(sorted(all.inter.pairs), bruteForceIntersectMeshes(a, Transform<double>(), b, Transform<double>()));
+  EXPECT_EQ(all.self_a.pairs.size(), 2u);
+  EXPECT_TRUE(all.self_b.pairs.empty());
+  // a0 and b0 share the point (1, 0, 0), a1 and b0 an edge, a1 and b1 the point (1, 1, 0).
+  EXPECT_EQ(sorted(all.inter.pairs), (std::vector<TrianglePair>{{0, 0}, {1, 0}, {1, 1}}));
+  QueryOptions one;
+  one.max_pairs = 1;
+  const AllPairsResult first = intersectAll(ha, hb, one);
+  EXPECT_EQ(first.self_a.pairs.size(), 1u);
+  EXPECT_FALSE(first.self_a.complete);
+  EXPECT_EQ(first.inter.pairs, intersectMeshes(ha, hb, one).pairs);
+  if (cudaDeviceCount() == 0) {
+    QueryOptions cuda;
+    cuda.backend = Backend::Cuda;
+    EXPECT_THROW(intersectAll(ha, hb, cuda), BackendUnavailableError);
+  }
+}
+
 TEST(Query, CudaBackendRequestIsATypedError) {
   if (cudaDeviceCount() > 0) GTEST_SKIP() << "a CUDA device is present (the cuda tests cover it)";
   HashedMesh<double> a(makeSphere<double>({0, 0, 0}, 1.0, 8, 4));

@@ -72,6 +72,24 @@ QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options = {});
 
+/// Every intersecting pair of two meshes: each one's self pairs and the pairs between them.
+struct AllPairsResult {
+  QueryResult self_a;  ///< intersectSelf(a)
+  QueryResult self_b;  ///< intersectSelf(b)
+  QueryResult inter;   ///< intersectMeshes(a, b)
+};
+
+/// The three queries of two meshes at once (a simulation step of two deforming bodies): the same
+/// pairs, in the same order, as intersectSelf(a), intersectSelf(b) and intersectMeshes(a, b) with
+/// the same options (max_pairs applies to each). The CPU backend runs the three queries. The
+/// CUDA backend hashes both meshes as one and runs one self query when that gives exactly the
+/// same pairs (every pair asked for, and poses that map one mesh's frame onto the other's
+/// exactly, such as two meshes in world coordinates): the paper's single hash for a whole scene
+/// (cuda/cuda_backend.h). Backend::Auto counts the triangles of both meshes.
+template <class S>
+AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options = {});
+
 /// Yes/no: do the two meshes have at least one intersecting triangle pair?
 template <class S>
 bool meshesIntersect(const HashedMesh<S>& a, const HashedMesh<S>& b, QueryOptions options = {}) {

@@ -331,11 +331,30 @@ QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options
   return cpu::intersectSelf(mesh, options);
 }
 
+template <class S>
+AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options) {
+  if (resolveBackend(options.backend, a.numTriangles() + b.numTriangles()) == Backend::Cuda) {
+#if KDET_FCL_HAVE_CUDA
+    return cuda::intersectAll(a, b, options);
+#endif
+  }
+  AllPairsResult r;
+  r.self_a = cpu::intersectSelf(a, options);
+  r.self_b = cpu::intersectSelf(b, options);
+  r.inter = cpu::intersectMeshes(a, b, options);
+  return r;
+}
+
 template QueryResult intersectMeshes(const HashedMesh<float>&, const HashedMesh<float>&,
                                      const QueryOptions&);
 template QueryResult intersectMeshes(const HashedMesh<double>&, const HashedMesh<double>&,
                                      const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<float>&, const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<double>&, const QueryOptions&);
+template AllPairsResult intersectAll(const HashedMesh<float>&, const HashedMesh<float>&,
+                                     const QueryOptions&);
+template AllPairsResult intersectAll(const HashedMesh<double>&, const HashedMesh<double>&,
+                                     const QueryOptions&);
 
 }  // namespace kdet_fcl
