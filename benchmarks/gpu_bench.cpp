@@ -267,7 +267,8 @@ Row runScene(const BScene& sc, const Config& cfg) {
   std::vector<TriangleMesh<float>> joint_frames;
   const auto split = static_cast<std::uint32_t>(sc.mesh(0, 0).numTriangles());
   if (joint)
-    for (int f = 0; f < F; ++f) joint_frames.push_back(kdet_bvh::jointMesh(sc.mesh(0, f), sc.mesh(1, f)));
+    for (int f = 0; f < F; ++f)
+      joint_frames.push_back(kdet_bvh::jointMesh(sc.mesh(0, f), sc.mesh(1, f)));
   for (std::size_t o = 0; o < bv.size(); ++o) {
     bv[o] = std::make_unique<kdet_bvh::GpuBvh<float>>();
     bv[o]->setMesh(joint ? joint_frames[0] : sc.mesh(int(o), 0));

@@ -70,6 +70,7 @@ constexpr int kQueryBlock = 128;
 constexpr int kFilterBlock = 256;
 constexpr std::size_t kMaxCachedMeshes = 32;
 constexpr std::size_t kPairCountWords = 7;  // Context::pair_count
+constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
 
 // ---------------------------------------------------------------------------------------------
 // Build kernels
@@ -964,7 +965,6 @@ class PinnedBuffer {
   std::size_t cap_ = 0;
 };
 
-/// One HashedMesh's device state.
 /// What a cache entry holds on the device: one mesh, or two hashed as one (intersectAll): the
 /// second's vertices follow the first's, its triangles follow the first's with their vertex
 /// indices shifted by the first's vertex count.
@@ -986,6 +986,7 @@ MeshSource<S> sourceOf(const TriangleMesh<S>* first, const TriangleMesh<S>* seco
   return src;
 }
 
+/// One HashedMesh's device state (or that of two hashed as one).
 template <class S>
 struct CachedMesh {
   const void* owner = nullptr;
@@ -1103,6 +1104,7 @@ struct Context {
   // counts of two kinds of a joint query (kindCounts()); zeroed before every pass.
   DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;
   PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + 3 pair counts + cell cands
+                            // + 2 kind counts
   PinnedBuffer readback;    // sorted pairs on their way into the result
 
   std::list<CachedMesh<float>> meshes_f;
@@ -1539,8 +1541,9 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upl
              bool try_async) {
   const cudaStream_t s = ctx.stream;
   const std::size_t nv = mesh.nv(), nt = mesh.nt();
-  static_assert(150000000u <= kEntryTriMask, "triangle indices must fit beside the first-cell bits");
-  if (nt > 150000000u)
+  static_assert(kMaxDeviceTriangles <= kEntryTriMask,
+                "triangle indices must fit beside the first-cell bits");
+  if (nt > kMaxDeviceTriangles)
     throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(nt) +
                             " triangles (at most 150,000,000)");
   const bool async = try_async && !upload_tris && m.key_words == 1 && m.nt == nt &&
@@ -2346,8 +2349,9 @@ AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
                             const QueryOptions& options) {
   // One hash for both when that gives exactly the three queries' pairs: the inter query would
   // decide on both meshes' own coordinates (poses that map one frame onto the other exactly),
-  // every pair is asked for, and both meshes have triangles.
+  // every pair is asked for, and both meshes have triangles (which fit in one entry together).
   const bool joint = options.max_pairs == 0 && a.numTriangles() > 0 && b.numTriangles() > 0 &&
+                     a.numTriangles() + b.numTriangles() <= kMaxDeviceTriangles &&
                      detail::relativePose(a.pose(), b.pose()).identity &&
                      !envFlag0("KDET_FCL_CUDA_JOINT");
   if (joint) return guarded([&](Context& ctx) { return jointImpl(ctx, a, b, options); });

@@ -87,7 +87,7 @@ template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options);
 
 /// intersectAll() on device 0. When every pair is asked for (max_pairs 0), both meshes have
-/// triangles and the inter query would decide on both meshes' own coordinates (their poses map
+/// triangles (together at most 150,000,000) and the inter query would decide on both meshes' own coordinates (their poses map
 /// one frame onto the other exactly: detail::relativePose's identity, e.g. two deforming meshes
 /// in world coordinates), both are hashed as one: a cache entry of their own holds the second
 /// mesh's vertices after the first's (its triangles' indices shifted), one build and one self
