@@ -2289,7 +2289,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   return res;
 }
 
-/// intersectAll with both meshes hashed as one (see cuda::intersectAll): one build, one self
+/// intersectAll with both meshes hashed as one (see cuda::intersectJoint): one build, one self
 /// query whose pairs across the two meshes are the inter-object pairs.
 template <class S>
 AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
@@ -2345,8 +2345,8 @@ QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options
 }
 
 template <class S>
-AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
-                            const QueryOptions& options) {
+bool intersectJoint(const HashedMesh<S>& a, const HashedMesh<S>& b, const QueryOptions& options,
+                    AllPairsResult* out) {
   // One hash for both when that gives exactly the three queries' pairs: the inter query would
   // decide on both meshes' own coordinates (poses that map one frame onto the other exactly),
   // every pair is asked for, and both meshes have triangles (which fit in one entry together).
@@ -2354,13 +2354,11 @@ AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
                      a.numTriangles() + b.numTriangles() <= kMaxDeviceTriangles &&
                      detail::relativePose(a.pose(), b.pose()).identity &&
                      !envFlag0("KDET_FCL_CUDA_JOINT");
-  if (joint) return guarded([&](Context& ctx) { return jointImpl(ctx, a, b, options); });
-  AllPairsResult r;
-  r.self_a = cuda::intersectSelf(a, options);
-  r.self_b = cuda::intersectSelf(b, options);
-  r.inter = cuda::intersectMeshes(a, b, options);
-  return r;
+  if (!joint) return false;
+  *out = guarded([&](Context& ctx) { return jointImpl(ctx, a, b, options); });
+  return true;
 }
+
 
 void setProfiling(bool on) {
   Context& ctx = context();
@@ -2437,10 +2435,10 @@ template QueryResult intersectMeshes(const HashedMesh<double>&, const HashedMesh
                                      const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<float>&, const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<double>&, const QueryOptions&);
-template AllPairsResult intersectAll(const HashedMesh<float>&, const HashedMesh<float>&,
-                                     const QueryOptions&);
-template AllPairsResult intersectAll(const HashedMesh<double>&, const HashedMesh<double>&,
-                                     const QueryOptions&);
+template bool intersectJoint(const HashedMesh<float>&, const HashedMesh<float>&,
+                             const QueryOptions&, AllPairsResult*);
+template bool intersectJoint(const HashedMesh<double>&, const HashedMesh<double>&,
+                             const QueryOptions&, AllPairsResult*);
 template void markDeformed(const HashedMesh<float>&);
 template void markDeformed(const HashedMesh<double>&);
 

@@ -86,19 +86,21 @@ QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options);
 
-/// intersectAll() on device 0. When every pair is asked for (max_pairs 0), both meshes have
-/// triangles (together at most 150,000,000) and the inter query would decide on both meshes' own coordinates (their poses map
-/// one frame onto the other exactly: detail::relativePose's identity, e.g. two deforming meshes
-/// in world coordinates), both are hashed as one: a cache entry of their own holds the second
-/// mesh's vertices after the first's (its triangles' indices shifted), one build and one self
-/// query find every pair, the adjacency rule applies only within a mesh, and the sorted pairs
-/// are dealt out to the three results as they arrive (QueryProfile::joint). The pair sets and
-/// their order are those of the three separate queries, for every predicate. Such a joint query
-/// keeps no self result (QueryResult::kept): for rigid meshes whose selfs are kept, the three
-/// queries cost less. KDET_FCL_CUDA_JOINT=0 runs the three queries (read at every call).
+/// intersectAll()'s joint form on device 0. Returns false, doing nothing, unless it applies; the
+/// caller then runs the three queries. It applies when every pair is asked for (max_pairs 0),
+/// both meshes have triangles (together at most 150,000,000) and the inter query would decide on
+/// both meshes' own coordinates (their poses map one frame onto the other exactly:
+/// detail::relativePose's identity, e.g. two deforming meshes in world coordinates). Then both
+/// are hashed as one: a cache entry of their own holds the second mesh's vertices after the
+/// first's (its triangles' indices shifted), one build and one self query find every pair, the
+/// adjacency rule applies only within a mesh, and the sorted pairs are dealt out to the three
+/// results as they arrive (QueryProfile::joint). The pair sets and their order are those of the
+/// three separate queries, for every predicate. Such a joint query keeps no self result
+/// (QueryResult::kept): for rigid meshes whose selfs are kept, the three queries cost less.
+/// KDET_FCL_CUDA_JOINT=0 turns it off (read at every call).
 template <class S>
-AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
-                            const QueryOptions& options);
+bool intersectJoint(const HashedMesh<S>& a, const HashedMesh<S>& b, const QueryOptions& options,
+                    AllPairsResult* out);
 
 /// Device-side times of the last GPU query (CUDA events), for the benchmarks. Recorded only while
 /// setProfiling(true); all zero otherwise.

@@ -334,17 +334,18 @@ QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options
 template <class S>
 AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
                             const QueryOptions& options) {
-  if (resolveBackend(options.backend, a.numTriangles() + b.numTriangles()) == Backend::Cuda) {
-#if KDET_FCL_HAVE_CUDA
-    return cuda::intersectAll(a, b, options);
-#endif
-  }
+  QueryOptions o = options;  // one backend for the three queries, chosen by both meshes' size
+  o.backend = resolveBackend(options.backend, a.numTriangles() + b.numTriangles());
   AllPairsResult r;
-  r.self_a = cpu::intersectSelf(a, options);
-  r.self_b = cpu::intersectSelf(b, options);
-  r.inter = cpu::intersectMeshes(a, b, options);
+#if KDET_FCL_HAVE_CUDA
+  if (o.backend == Backend::Cuda && cuda::intersectJoint(a, b, o, &r)) return r;
+#endif
+  r.self_a = intersectSelf(a, o);
+  r.self_b = intersectSelf(b, o);
+  r.inter = intersectMeshes(a, b, o);
   return r;
 }
+
 
 template QueryResult intersectMeshes(const HashedMesh<float>&, const HashedMesh<float>&,
                                      const QueryOptions&);
