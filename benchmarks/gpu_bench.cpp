@@ -237,6 +237,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
       prof->output_ms += p.output_ms;
       prof->total_ms += p.total_ms;
       prof->candidates += p.candidates;
+      prof->rounds = std::max(prof->rounds, p.rounds);
     };
     auto take = [&](QueryResult q) {
       n += q.pairs.size();
@@ -245,6 +246,15 @@ Row runScene(const BScene& sc, const Config& cfg) {
     if (joint) {
       AllPairsResult all = intersectAll(H(0, f), H(1, f), opts(Backend::Cuda));
       profiled();
+      if (prof && !cuda::lastQueryProfile().joint) {
+        // The backend ran the three queries (e.g. KDET_FCL_CUDA_JOINT=0): the profile is the
+        // last one's only. Use --joint none to time the three queries.
+        static bool warned = false;
+        if (!warned)
+          std::fprintf(stderr, "warning: intersectAll did not run joint; device times cover "
+                               "only its last query (use --joint none)\n");
+        warned = true;
+      }
       take(std::move(all.self_a));
       take(std::move(all.self_b));
       take(std::move(all.inter));
@@ -322,11 +332,15 @@ Row runScene(const BScene& sc, const Config& cfg) {
     return n;
   };
 
-  // Device memory of one frame: the caches of frame 0's meshes plus the backend's scratch.
-  kdetGpuFrame(0, nullptr, nullptr);
+  // Device memory of one frame: the caches of frame 0's meshes plus the backend's scratch (and
+  // the most rounds one of its queries took: cuda::QueryProfile::rounds).
+  cuda::setProfiling(true);
+  cuda::QueryProfile first;
+  kdetGpuFrame(0, nullptr, &first);
+  cuda::setProfiling(false);
   r.bytes_per_tri = double(cuda::deviceBytesInUse()) / double(r.triangles);
-  std::fprintf(stderr, "[%s] device memory %.0f B/tri: %s\n", sc.id.c_str(), r.bytes_per_tri,
-               cuda::deviceMemoryReport().c_str());
+  std::fprintf(stderr, "[%s] device memory %.0f B/tri (rounds %d): %s\n", sc.id.c_str(),
+               r.bytes_per_tri, first.rounds, cuda::deviceMemoryReport().c_str());
 
   // ---- correctness pass (untimed): every frame, every method ----
   std::vector<std::unique_ptr<HashedMesh<float>>> cpu2, cpu16;

@@ -21,7 +21,9 @@
 // constant memory (c_info), copied device to device, so the host never needs a re-hash's grid.
 // Memory: the build's sort and count scratch is carved out of the query buffers (candidates,
 // pairs, sorted pairs), which are idle during a build; the filter's survivors use the sorted-pair
-// buffer, idle until the final sort.
+// buffer, idle until the final sort. A query with more candidates than 14 per query
+// triangle runs phase 1, the filter and phase 2 in rounds over ranges of its tasks, which reuse
+// the candidate and survivor buffers (runQuery, roundsFor), all queued before the one read-back.
 // benchmarks/RESULTS-gpu.md has the measurements behind these choices.
 
 #include <cooperative_groups.h>
@@ -69,7 +71,21 @@ constexpr int kBuildBlock = 256;
 constexpr int kQueryBlock = 128;
 constexpr int kFilterBlock = 256;
 constexpr std::size_t kMaxCachedMeshes = 32;
-constexpr std::size_t kPairCountWords = 7;  // Context::pair_count
+// Context::pair_count's words: the counters of one query pass (zeroed before it), see there.
+enum PairCountWord : int {
+  kCandCount = 0,    // candidates of this round (phase 1)
+  kPairCount = 1,    // pairs of all rounds (exact test)
+  kSurvCount = 2,    // survivors of the plane filter, this round
+  kWarpTasks = 3,    // task counter of the warp-wide candidate kernels, this round
+  kCellTasks = 4,    // task counter of the same-level pairs, this round
+  kKindCounts = 5,   // two words: the pairs of kinds 1 and 2 of a joint query (unpackPairsKernel)
+  kMaxCands = 7,     // the most candidates of one round (roundEndKernel)
+  kAllCands = 8,     // candidates of all rounds
+  kMaxSurv = 9,      // the most survivors of one round
+  kAllSurv = 10,     // survivors of all rounds
+  kCellCands = 11,   // of all candidates, the cells' (profiling only: addCountKernel)
+  kPairCountWords = 12
+};
 constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
 
 // ---------------------------------------------------------------------------------------------
@@ -434,6 +450,43 @@ __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, s
     out.pairs[idx] = (static_cast<unsigned long long>(a) << out.b_bits) | b;
 }
 
+/// One round of a query pass: phase 1, filter and exact tests of one contiguous range of the
+/// candidate search's tasks (runQuery: a query whose candidates would not fit in the candidate
+/// buffer's limit runs in several rounds, each reusing the buffer; the pairs add up across
+/// rounds). The ranges partition the tasks in order. (Strided shares, round r taking the tasks
+/// r, r + count, ..., were measured slower: benchmarks/RESULTS-gpu.md.)
+struct Round {
+  std::uint32_t index;
+  std::uint32_t count;
+};
+
+/// How many of `tasks` tasks fall to the round (host and device agree).
+__host__ __device__ __forceinline__ unsigned long long roundTasks(unsigned long long tasks,
+                                                                  Round r) {
+  return tasks * (r.index + 1) / r.count - tasks * r.index / r.count;
+}
+
+/// The task of the k-th of the round's tasks (k < roundTasks(tasks, r)).
+__device__ __forceinline__ unsigned long long roundTask(unsigned long long k,
+                                                        unsigned long long tasks, Round r) {
+  return tasks * r.index / r.count + k;
+}
+
+/// Between rounds: keeps the round's candidate and survivor counts (the most of one round, and
+/// the sum of all) and zeroes the per-round counters; the pair count goes on. One thread.
+__global__ void roundEndKernel(unsigned long long* w) {
+  w[kMaxCands] = max(w[kMaxCands], w[kCandCount]);
+  w[kAllCands] += w[kCandCount];
+  w[kMaxSurv] = max(w[kMaxSurv], w[kSurvCount]);
+  w[kAllSurv] += w[kSurvCount];
+  w[kCandCount] = w[kSurvCount] = w[kWarpTasks] = w[kCellTasks] = 0;
+}
+
+/// *to += *from (one thread): the cells' share of a round's candidates, while profiling.
+__global__ void addCountKernel(const unsigned long long* from, unsigned long long* to) {
+  *to += *from;
+}
+
 template <class S>
 __global__ void mapVerticesKernel(std::uint32_t n, const Vec3<S>* __restrict__ v,
                                   Transform<double> a_to_b, Vec3<S>* __restrict__ out) {
@@ -510,11 +563,13 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     interCandidatesKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
                           std::uint32_t na, std::uint32_t nb, bool identity,
                           Transform<double> b_to_a, double eps_coef, double eps_tmag,
-                          bool a_ordered, bool b_ordered, PairSink cand) {
-  // One tile of G lanes per query triangle (tile-uniform index).
+                          bool a_ordered, bool b_ordered, Round round, PairSink cand) {
+  // One tile of G lanes per query triangle (tile-uniform index), from the round's first.
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
-  const auto idx = static_cast<std::uint32_t>(
-      (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G);
+  const unsigned long long k =
+      (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G;
+  if (k >= roundTasks(na + nb, round)) return;
+  const auto idx = static_cast<std::uint32_t>(roundTask(k, na + nb, round));
   if (idx < na) {
     const std::uint32_t i = idx;
     const double di = A.diam[i];
@@ -524,7 +579,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     scanCandidatesGroup<kSpans>(
         B, cInfo(1), q, di, b_ordered, 0, tile, [&](std::uint32_t, double dj) { return dj >= di; },
         [&](std::uint32_t j) { emitPair(cand, i, j); });
-  } else if (idx < na + nb) {
+  } else {
     const std::uint32_t j = idx - na;
     const double dj = B.diam[j];
     if (dj >= cInfo(0).d_max) return;  // nothing in A is strictly larger
@@ -541,11 +596,12 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
 template <class S, int G, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesKernel(HashView<S> M, std::uint32_t n, bool ordered, int level_skip,
-                         std::uint32_t split, PairSink cand) {
+                         std::uint32_t split, Round round, PairSink cand) {
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
-  const auto i = static_cast<std::uint32_t>(
-      (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G);
-  if (i >= n) return;
+  const unsigned long long k =
+      (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G;
+  if (k >= roundTasks(n, round)) return;
+  const auto i = static_cast<std::uint32_t>(roundTask(k, n, round));
   const double di = M.diam[i];
   scanCandidatesGroup<kSpans>(
       M, cInfo(0), boxOf(M, i), di, ordered, level_skip, tile,
@@ -572,18 +628,20 @@ __device__ __forceinline__ unsigned long long nextWarpTask(unsigned long long* t
 template <class S>
 constexpr bool kWarpTaskLoop = std::is_same<S, float>::value;
 
-/// Calls run(task) for each task of [0, count) that this warp takes: from the counter `tasks`
-/// until they run out, or, with tasks == nullptr (one warp per task, the grid covering them all),
-/// the one task of the warp's index in the grid. Warp-uniform; every lane must call.
+/// Calls run(task) for each task of the round's share of [0, count) (roundTask) that this warp
+/// takes: from the counter `tasks` until they run out, or, with tasks == nullptr (one warp per
+/// task, the grid covering the round's tasks), the one task of the warp's index in the grid.
+/// Warp-uniform; every lane must call.
 template <class S, class Run>
 __device__ __forceinline__ void forEachWarpTask(unsigned long long* tasks,
-                                                unsigned long long count, Run&& run) {
+                                                unsigned long long count, Round round, Run&& run) {
   const bool loop = kWarpTaskLoop<S> && tasks != nullptr;
-  unsigned long long task =
+  const unsigned long long mine = roundTasks(count, round);
+  unsigned long long k =
       loop ? nextWarpTask(tasks)
            : (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) >> 5;
-  for (; task < count; task = nextWarpTask(tasks)) {
-    run(task);
+  for (; k < mine; k = nextWarpTask(tasks)) {
+    run(roundTask(k, count, round));
     if (!loop) break;
   }
 }
@@ -595,13 +653,13 @@ template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
                              std::uint32_t max_visit, int level_skip, std::uint32_t split,
-                             PairSink cand, unsigned long long* tasks) {
+                             Round round, PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   const std::uint32_t lane = threadIdx.x & 31u;
   const std::uint32_t per_warp = 32u >> log_p;
   const unsigned long long count = (n + per_warp - 1) / per_warp;
-  forEachWarpTask<S>(tasks, count, [&](unsigned long long task) {
+  forEachWarpTask<S>(tasks, count, round, [&](unsigned long long task) {
     const std::uint32_t i = static_cast<std::uint32_t>(task) * per_warp + (lane >> log_p);
     WarpQuery mine;
     mine.id = i;
@@ -651,15 +709,16 @@ __device__ __forceinline__ Aabb<S> loadBoxOf(const Aabb<S>* p) {
 /// whatever row they belong to (prefix sum and owner search, as scanCandidatesWarp), each row in
 /// visits of at most max_visit partners. kSpans: a pair whose sub-cell spans in the cell do not
 /// overlap (both entries' spans: subcellSpan is monotone, so boxes that overlap have overlapping
-/// spans) is dropped before the partner's box is loaded. Tasks come from the counter `tasks`; the
-/// grid is the resident blocks. Only the cells this build stored are read (info.cells against
-/// cell_cap; none after need_sync): a re-hash that did not fit reruns the query anyway
-/// (checkPending).
+/// spans) is dropped before the partner's box is loaded. The round's share of the tasks
+/// (roundTask) comes from the counter `tasks`; the grid is the resident blocks. Only the cells
+/// this build stored are read (info.cells against cell_cap; none after need_sync): a re-hash that
+/// did not fit reruns the query anyway (checkPending).
 template <class S, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, 8)
     selfCellPairsKernel(HashView<S> M, const std::uint32_t* __restrict__ block_cell,
                         std::uint32_t cell_cap, std::uint32_t rows, std::uint32_t max_visit,
-                        std::uint32_t split, PairSink cand, unsigned long long* tasks) {
+                        std::uint32_t split, Round round, PairSink cand,
+                        unsigned long long* tasks) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
   Aabb<S>* const row_box = row_boxes[threadIdx.x >> 5];
@@ -669,7 +728,9 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
   if (cells == 0) return;
   const std::uint32_t entries = __ldg(M.cell_begin + cells);  // the stored cells' entries
   const unsigned long long count = (entries + rows - 1ull) / rows;
-  for (unsigned long long task = nextWarpTask(tasks); task < count; task = nextWarpTask(tasks)) {
+  const unsigned long long mine = roundTasks(count, round);
+  for (unsigned long long t = nextWarpTask(tasks); t < mine; t = nextWarpTask(tasks)) {
+    const unsigned long long task = roundTask(t, count, round);
     const std::uint32_t first = static_cast<std::uint32_t>(task) * rows;
     const std::uint32_t k = first + lane;  // the row of lanes < rows
     // Entries [32 * (first / 32), first + rows) lie in at most 32 consecutive cells from c0
@@ -740,15 +801,15 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     interCandidatesWarpKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
                               std::uint32_t na, std::uint32_t nb, bool identity,
                               Transform<double> b_to_a, double eps_coef, double eps_tmag,
-                              unsigned int log_p, std::uint32_t max_visit, PairSink cand,
-                              unsigned long long* tasks) {
+                              unsigned int log_p, std::uint32_t max_visit, Round round,
+                              PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   const std::uint32_t lane = threadIdx.x & 31u;
   const std::uint32_t per_warp = 32u >> log_p;
   const unsigned long long wa = (na + per_warp - 1) / per_warp;
   const unsigned long long count = wa + (nb + per_warp - 1) / per_warp;
-  forEachWarpTask<S>(tasks, count, [&](unsigned long long task) {
+  forEachWarpTask<S>(tasks, count, round, [&](unsigned long long task) {
     const bool a_side = task < wa;
     const std::uint32_t idx =
         static_cast<std::uint32_t>(a_side ? task : task - wa) * per_warp + (lane >> log_p);
@@ -1088,7 +1149,10 @@ struct Context {
   std::mutex mutex;
   bool ready = false;
   cudaStream_t stream = nullptr;
-  cudaEvent_t ev[6] = {};
+  cudaEvent_t ev[4] = {};
+  // While profiling, three events per round of a query pass (markRound): before its phase 1
+  // (round 0: ev[1]), after its phase 1 and after its plane filter. Created as needed.
+  std::vector<cudaEvent_t> round_ev;
   bool profiling = false;
   QueryProfile profile;
 
@@ -1099,12 +1163,13 @@ struct Context {
   // The build's sort and count scratch is carved out of cands / pairs / pairs_sorted (rebuild()).
   DeviceBuffer<Vec3<float>> mapped_f;
   DeviceBuffer<Vec3<double>> mapped_d;
-  // pair_count: the candidate, pair and survivor counters, the task counter of the warp-wide
-  // candidate kernels (warpTasks()), that of the same-level pairs (cellTasks()) and the pair
-  // counts of two kinds of a joint query (kindCounts()); zeroed before every pass.
+  // pair_count: the counters of a query pass (PairCountWord), zeroed before every pass: the
+  // round's candidate and survivor counts, the pair count, the task counters of the warp-wide
+  // candidate kernels (warpTasks()) and of the same-level pairs (cellTasks()), the pair counts of
+  // two kinds of a joint query (kindCounts()), and the rounds' totals (roundEndKernel).
   DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;
-  PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + 3 pair counts + cell cands
-                            // + 2 kind counts
+  PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + 2 kind counts + the
+                            // kPairCountWords counters of the last pass
   PinnedBuffer readback;    // sorted pairs on their way into the result
 
   std::list<CachedMesh<float>> meshes_f;
@@ -1122,7 +1187,7 @@ struct Context {
     for (cudaEvent_t& e : ev) CUDA_TRY(cudaEventCreate(&e));
     red.reserve(1);
     pair_count.reserve(kPairCountWords);
-    host_small.reserve(3 * sizeof(BuildInfo) + 8 * sizeof(unsigned long long));
+    host_small.reserve(3 * sizeof(BuildInfo) + (4 + kPairCountWords) * sizeof(unsigned long long));
     ready = true;
   }
 
@@ -1132,12 +1197,11 @@ struct Context {
                                                  3 * sizeof(BuildInfo));
   }
   unsigned long long* hostCells() { return hostTotal() + 1; }
-  unsigned long long* hostCount() { return hostTotal() + 2; }
-  unsigned long long* hostCellCandidates() { return hostTotal() + 5; }
-  unsigned long long* hostKinds() { return hostTotal() + 6; }  // 2 words (unpackPairsKernel)
-  unsigned long long* warpTasks() { return pair_count.data() + 3; }
-  unsigned long long* cellTasks() { return pair_count.data() + 4; }
-  unsigned long long* kindCounts() { return pair_count.data() + 5; }  // 2 words
+  unsigned long long* hostKinds() { return hostTotal() + 2; }  // 2 words (unpackPairsKernel)
+  unsigned long long* hostCount() { return hostTotal() + 4; }  // kPairCountWords words
+  unsigned long long* warpTasks() { return pair_count.data() + kWarpTasks; }
+  unsigned long long* cellTasks() { return pair_count.data() + kCellTasks; }
+  unsigned long long* kindCounts() { return pair_count.data() + kKindCounts; }  // 2 words
 
   /// Drops all device memory without throwing (after a CUDA error, or on request): the next
   /// call re-uploads what it needs.
@@ -1165,6 +1229,16 @@ struct Context {
 
   void record(int k) {
     if (profiling) CUDA_TRY(cudaEventRecord(ev[k], stream));
+  }
+  /// While profiling: event k (0 before phase 1, 1 after it, 2 after the plane filter) of round r.
+  void markRound(std::uint32_t r, int k) {
+    if (!profiling) return;
+    while (round_ev.size() < 3 * (std::size_t(r) + 1)) {
+      cudaEvent_t e = nullptr;
+      CUDA_TRY(cudaEventCreate(&e));
+      round_ev.push_back(e);
+    }
+    CUDA_TRY(cudaEventRecord(round_ev[3 * r + k], stream));
   }
 };
 
@@ -1687,9 +1761,38 @@ bool planeFilterOn() {
   return !(e && *e == '0');
 }
 
-/// Runs `launch(cand, survivors, out)` (it returns whether the plane filter ran) until every pair
-/// fits (overflow: grow, rerun), then sorts the pairs on the
-/// device and copies the first max_pairs (or all) of the sorted order into the result. With
+/// The candidates one round of a query may hold per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES
+/// = k, read at every query; default 14; 0: no limit). A query whose phase 1 gives more (two
+/// near-coincident cloth frames hashed as one give 21 per triangle) runs its tasks in rounds
+/// that reuse the candidate buffer, so that the buffer holds about k per triangle (8 bytes
+/// each), not all of them (runQuery). Each extra round costs time (on an H100, 0.3 ms on those
+/// two frames: benchmarks/RESULTS-gpu.md); 14 keeps them under 256 bytes per triangle with two
+/// rounds. Without the knob the limit is at least 2^16 candidates; with it, exactly k per
+/// triangle (tests force many rounds on small meshes).
+std::size_t roundCandidateLimit(std::size_t work) {
+  const char* e = std::getenv("KDET_FCL_CUDA_ROUND_CANDIDATES");
+  if (e == nullptr || *e == 0) return std::max<std::size_t>(std::size_t(1) << 16, 14 * work);
+  return static_cast<std::size_t>(std::strtoull(e, nullptr, 10)) * work;
+}
+
+/// Rounds for `candidates` candidates under the limit: one while they fit in it, else each round
+/// planned at 4/5 of it, as the rounds' ranges of tasks are only near-equal in candidates (at
+/// most kMaxRounds).
+constexpr std::uint32_t kMaxRounds = 256;
+std::uint32_t roundsFor(double candidates, std::size_t limit) {
+  if (limit == 0 || !(candidates > double(limit))) return 1;
+  const double r = std::ceil(candidates / (0.8 * double(limit)));
+  return r >= kMaxRounds ? kMaxRounds : static_cast<std::uint32_t>(r);
+}
+
+/// Runs `launch(cand, survivors, out, round)` (it returns whether the plane filter ran) for each
+/// round of a pass, until every pair fits (overflow: grow, or more rounds; rerun), then sorts the
+/// pairs on the device and copies the first max_pairs (or all) of the sorted order into the
+/// result. The rounds (roundsFor: from `density`, the candidates per unit of `work` of the last
+/// query of this kind on these meshes, and from the counts of a pass that overflowed) split the
+/// candidate search's tasks into contiguous ranges (Round); each round's candidates and survivors
+/// reuse their buffers, its pairs add to the others'. All rounds of a pass are queued at once:
+/// the host reads the counts back once per pass, as with one round. With
 /// `parts` (two meshes hashed as one, the first's triangles below `split`; max_pairs 0), the
 /// pairs carry their kind in the two bits above the first index's a_bits (selfExactKernel), the
 /// sort covers those bits too, so the three kinds come as three runs, whose lengths the unpack
@@ -1698,8 +1801,8 @@ bool planeFilterOn() {
 /// order, as the three separate queries give them.
 template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
-                     std::size_t work, const QueryOptions& options, std::uint32_t split = 0,
-                     QueryResult* parts = nullptr) {
+                     std::size_t work, double density, const QueryOptions& options,
+                     std::uint32_t split = 0, QueryResult* parts = nullptr) {
   const cudaStream_t s = ctx.stream;
   ctx.cands.reserve(std::max<std::size_t>(std::size_t(1) << 16, 8 * work));
   ctx.pairs.reserve(std::max<std::size_t>(std::size_t(1) << 16, work));
@@ -1714,28 +1817,44 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     cap = std::min(cap, knob);
     surv_cap = std::min(surv_cap, knob);
   }
+  const std::size_t limit = roundCandidateLimit(work);
+  std::uint32_t rounds = roundsFor(density * double(work), limit);
   unsigned long long n = 0;
   int passes = 0;
+  unsigned long long* const w = ctx.pair_count.data();
+  const unsigned long long* const h = ctx.hostCount();
   while (true) {
     ++passes;
-    CUDA_TRY(cudaMemsetAsync(ctx.pair_count.data(), 0, kPairCountWords * sizeof(unsigned long long),
-                             s));
-    const bool filtered =
-        launch(PairSink{ctx.cands.data(), ctx.pair_count.data(), cand_cap, 32},
-               PairSink{ctx.pairs_sorted.data(), ctx.pair_count.data() + 2, surv_cap, 32},
-               PairSink{ctx.pairs.data(), ctx.pair_count.data() + 1, cap, b_bits});
-    checkLaunch();
-    CUDA_TRY(cudaMemcpyAsync(ctx.hostCount(), ctx.pair_count.data(), 3 * sizeof(unsigned long long),
+    CUDA_TRY(cudaMemsetAsync(w, 0, kPairCountWords * sizeof(unsigned long long), s));
+    bool filtered = false;
+    for (std::uint32_t r = 0; r < rounds; ++r) {
+      if (r > 0) ctx.markRound(r, 0);
+      filtered = launch(PairSink{ctx.cands.data(), w + kCandCount, cand_cap, 32},
+                        PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32},
+                        PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits},
+                        Round{r, rounds});
+      checkLaunch();
+      if (rounds > 1) {
+        roundEndKernel<<<1, 1, 0, s>>>(w);
+        checkLaunch();
+      }
+    }
+    CUDA_TRY(cudaMemcpyAsync(ctx.hostCount(), w, kPairCountWords * sizeof(unsigned long long),
                              cudaMemcpyDeviceToHost, s));
     pending.enqueue();  // the BuildInfo of meshes re-hashed without read-back, same sync
     CUDA_TRY(cudaStreamSynchronize(s));
     if (pending.check()) continue;  // a re-hash did not fit: rebuilt with read-backs, rerun
-    const unsigned long long nc = ctx.hostCount()[0];
-    n = ctx.hostCount()[1];
+    // The most candidates of one round, and of all rounds (one round: its own counters).
+    const unsigned long long nc = rounds > 1 ? h[kMaxCands] : h[kCandCount];
+    const unsigned long long nc_all = rounds > 1 ? h[kAllCands] : h[kCandCount];
+    n = h[kPairCount];
     // Without the filter the exact kernel reads the candidates directly.
-    const unsigned long long ns = filtered ? ctx.hostCount()[2] : nc;
-    ctx.profile.candidates = nc;
-    ctx.profile.exact_tests = ns;
+    const unsigned long long ns = filtered ? (rounds > 1 ? h[kMaxSurv] : h[kSurvCount]) : nc;
+    const unsigned long long ns_all =
+        filtered ? (rounds > 1 ? h[kAllSurv] : h[kSurvCount]) : nc_all;
+    ctx.profile.candidates = nc_all;
+    ctx.profile.exact_tests = ns_all;
+    ctx.profile.rounds = static_cast<int>(rounds);
     if (nc <= cand_cap && n <= cap && (!filtered || ns <= surv_cap)) break;
     // The device counted everything it could not store: grow and rerun (no pair is dropped).
     if (nc > 0x7FFFFFFFull || n > 0x7FFFFFFFull)
@@ -1745,7 +1864,15 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       surv_cap = ctx.pairs_sorted.capacity();
     }
     if (nc > cand_cap) {
-      ctx.cands.reserve(nc);
+      // More rounds, each within the limit; or, when more rounds would not help (a round's
+      // share was crowded, or the rounds are at their maximum), a larger buffer.
+      const std::uint32_t more = roundsFor(double(nc_all), limit);
+      if (more > rounds) {
+        rounds = more;
+        ctx.cands.reserve(limit, false);
+      } else {
+        ctx.cands.reserve(nc);
+      }
       cand_cap = ctx.cands.capacity();
     }
     if (n > cap) {
@@ -1823,12 +1950,16 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     ctx.profile.query_ms = t12;
     ctx.profile.output_ms = t23;
     ctx.profile.total_ms = t03;
-    float t14 = 0;
-    CUDA_TRY(cudaEventElapsedTime(&t14, ctx.ev[1], ctx.ev[4]));
-    ctx.profile.candidates_ms = t14;
-    float t45 = 0;
-    CUDA_TRY(cudaEventElapsedTime(&t45, ctx.ev[4], ctx.ev[5]));
-    ctx.profile.filter_ms = t45;
+    // Phase 1 and the filter of every round of the last pass (round 0 from event 1).
+    for (std::uint32_t r = 0; r < rounds; ++r) {
+      float tc = 0, tf = 0;
+      CUDA_TRY(cudaEventElapsedTime(&tc, r == 0 ? ctx.ev[1] : ctx.round_ev[3 * r],
+                                    ctx.round_ev[3 * r + 1]));
+      CUDA_TRY(cudaEventElapsedTime(&tf, ctx.round_ev[3 * r + 1], ctx.round_ev[3 * r + 2]));
+      ctx.profile.candidates_ms += tc;
+      ctx.profile.filter_ms += tf;
+    }
+    ctx.profile.cell_candidates = h[kCellCands];
     ctx.profile.passes = passes;
     ctx.profile.pairs = n;
   }
@@ -1925,6 +2056,7 @@ struct WarpScanLaunch {
   unsigned int blocks;
   unsigned long long* tasks;
 };
+
 /// At most `all` blocks of kQueryBlock threads: no more than the device holds at once, as the
 /// occupancy calculator gives for `kernel` (cached per kernel; the context's mutex serialises the
 /// callers).
@@ -1946,7 +2078,8 @@ template <class S, class Kernel>
 WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long tasks) {
   const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
   ctx.profile.warp_tasks = dynamic;
-  const unsigned int all = blocksFor(32 * tasks, kQueryBlock);
+  // (At least one block: a round may have no tasks.)
+  const unsigned int all = std::max(1u, blocksFor(32 * tasks, kQueryBlock));
   if (!dynamic) return {all, nullptr};
   return {residentBlocks(kernel, all), ctx.warpTasks()};
 }
@@ -2138,7 +2271,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const bool warp = warpScan();
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
-  auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
+  auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
     ctx.profile.cells_by_size = A.size_ordered && B.size_ordered;
@@ -2152,29 +2285,30 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
           (na + per_warp - 1) / per_warp + (nb + per_warp - 1) / per_warp;
       const auto kernel = spans ? interCandidatesWarpKernel<S, 8, true>
                                 : interCandidatesWarpKernel<S, 8, false>;
-      const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, warps);
+      const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
       kernel<<<wl.blocks, kQueryBlock, 0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a,
-                                               eps_coef, eps_tmag, log_p, warpVisit(), cand,
-                                               wl.tasks);
+                                               eps_coef, eps_tmag, log_p, warpVisit(), round,
+                                               cand, wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
         constexpr int MB = decltype(mb)::value;
         const auto kernel = spans ? interCandidatesKernel<S, G, MB, true>
                                   : interCandidatesKernel<S, G, MB, false>;
-        kernel<<<blocksFor(G * (na + nb), kQueryBlock), kQueryBlock, 0, s>>>(
+        kernel<<<std::max(1u, blocksFor(G * roundTasks(na + nb, round), kQueryBlock)),
+                 kQueryBlock, 0, s>>>(
             av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, A.size_ordered,
-            B.size_ordered, cand);
+            B.size_ordered, round, cand);
       });
     }
     checkLaunch();
-    ctx.record(4);
+    ctx.markRound(round.index, 1);
     PairSink in = cand;
     if (filter) {
       launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, surv);
       in = surv;
     }
-    ctx.record(5);
+    ctx.markRound(round.index, 2);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
       interExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
@@ -2184,7 +2318,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   };
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
                            {sourceOf(&a.mesh()), sourceOf(&b.mesh())}};
-  QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb, options);
+  QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,
+                             std::max(A.inter_density, B.inter_density), options);
   A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
   return res;
 }
@@ -2208,7 +2343,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.self_cell_pairs = cell_pairs;
-  auto launch = [&](PairSink cand, PairSink surv, PairSink out) {
+  auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     const HashView<S> mv = M.view();
     ctx.profile.cells_by_size = M.size_ordered;
     bindInfo<S>(s, M, nullptr);
@@ -2220,11 +2355,12 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
           kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
       kernel<<<blocks, kQueryBlock, 0, s>>>(mv, M.block_cell.data(),
                                             M.pending ? M.pending_cell_cap : M.cell_cap, rows,
-                                            warpVisit(), split, cand, ctx.cellTasks());
+                                            warpVisit(), split, round, cand, ctx.cellTasks());
       checkLaunch();
-      if (ctx.profiling)  // the candidates so far are the cells' (QueryProfile::cell_candidates)
-        CUDA_TRY(cudaMemcpyAsync(ctx.hostCellCandidates(), cand.count, sizeof(unsigned long long),
-                                 cudaMemcpyDeviceToHost, s));
+      if (ctx.profiling) {  // the round's candidates so far are the cells' (cell_candidates)
+        addCountKernel<<<1, 1, 0, s>>>(cand.count, ctx.pair_count.data() + kCellCands);
+        checkLaunch();
+      }
     }
     if (warp) {
       const auto kernel =
@@ -2232,27 +2368,28 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
       const unsigned int log_p = warpLanesLog2(n, M.self_density);
       ctx.profile.warp_lanes = 1 << log_p;
       const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
-      const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, warps);
+      const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
       kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip, split,
-                                               cand, wl.tasks);
+                                               round, cand, wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
         constexpr int MB = decltype(mb)::value;
         const auto kernel =
             spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
-        kernel<<<blocksFor(G * n, kQueryBlock), kQueryBlock, 0, s>>>(mv, un, M.size_ordered,
-                                                                     level_skip, split, cand);
+        kernel<<<std::max(1u, blocksFor(G * roundTasks(n, round), kQueryBlock)), kQueryBlock, 0,
+                 s>>>(
+            mv, un, M.size_ordered, level_skip, split, round, cand);
       });
     }
     checkLaunch();
-    ctx.record(4);
+    ctx.markRound(round.index, 1);
     PairSink in = cand;
     if (filter) {
       launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, surv);
       in = surv;
     }
-    ctx.record(5);
+    ctx.markRound(round.index, 2);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
       selfExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
@@ -2261,10 +2398,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     return filter;
   };
   PendingBuilds<S> pending{ctx, {&M, nullptr}, {src, MeshSource<S>{}}};
-  *ctx.hostCellCandidates() = 0;
-  QueryResult res =
-      runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, options, split, parts);
-  ctx.profile.cell_candidates = *ctx.hostCellCandidates();  // (0 unless profiling)
+  QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, M.self_density,
+                             options, split, parts);
   M.self_density = double(ctx.profile.candidates) / double(n);
   return res;
 }

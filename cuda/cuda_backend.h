@@ -16,7 +16,9 @@
 // the compact sort), the mesh is rebuilt with read-backs and the query reruns.
 //
 // Output: every pair is found (the device buffer grows and the query reruns on overflow, which
-// the device detects), then radix-sorted on the device: the result is sorted by (a, b), so it is
+// the device detects; a query whose candidates would exceed 14 per query triangle finds
+// and tests them in rounds that reuse one candidate buffer, and KDET_FCL_CUDA_ROUND_CANDIDATES=k
+// sets that limit, 0 for none, read at every query), then radix-sorted on the device: the result is sorted by (a, b), so it is
 // deterministic but ordered differently from the CPU backend. With max_pairs = k > 0 the GPU
 // computes all pairs and returns the first k of the sorted order (no early stop on the device).
 //
@@ -112,6 +114,8 @@ struct QueryProfile {
   double output_ms = 0;   ///< sort of the pairs + device->host copy
   double total_ms = 0;    ///< first event to last
   int passes = 0;         ///< query passes (> 1 after an output overflow)
+  int rounds = 0;         ///< rounds of the last pass (> 1: the candidates were found and tested
+                          ///< in parts, KDET_FCL_CUDA_ROUND_CANDIDATES)
   std::size_t pairs = 0;  ///< pairs found (before max_pairs truncation)
   std::size_t candidates = 0;  ///< candidate pairs of phase 1 (before the plane filter)
   std::size_t exact_tests = 0;  ///< pairs that reached the exact test (after the plane filter)

@@ -787,6 +787,107 @@ TYPED_TEST(CudaQueryTyped, IntersectAllHashesTwoMeshesAsOneWithTheThreeQueriesPa
 #endif
 }
 
+TYPED_TEST(CudaQueryTyped, QueriesInRoundsFindTheSameCandidatesAndPairsInLessMemory) {
+  // A query whose candidates exceed the limit per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES)
+  // runs phase 1, the filter and the exact tests in rounds over ranges of its tasks, reusing the
+  // candidate buffer. Every query kind and scan must give the one-round query's candidates, exact
+  // tests and pairs: self (cells' pairs on and off, the tile scan), inter (identity and rotated
+  // poses) and joint. With the density of an earlier query the rounds are planned (one pass);
+  // from a fresh start, an overflow teaches them (a second pass), also with every buffer forced
+  // to overflow. And a crowded soup's self query in many rounds holds well under all of its
+  // candidates at once.
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv keep_off("KDET_FCL_CUDA_SELF_CACHE", "0");
+  cuda::setProfiling(true);
+  HashedMesh<S> f0(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.8)));
+  HashedMesh<S> f1(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.81)));
+  HashedMesh<S> soup_a(makeRandomSoup<S>(3000, S(0.6), S(0.01), S(0.3), 3));
+  HashedMesh<S> soup_b(makeRandomSoup<S>(2000, S(0.6), S(0.01), S(0.3), 4));
+  HashedMesh<S> crowd(makeRandomSoup<S>(4000, S(0.3), S(0.05), S(0.3), 7));
+  soup_b.setPose(makeTransform<S>({S(0.6), S(0), S(0.8)}, S(0.05), {S(0.01), S(0), S(0)}));
+  struct Run {
+    std::vector<std::vector<TrianglePair>> pairs;
+    cuda::QueryProfile profile;
+  };
+  const std::function<Run()> queries[] = {
+      [&] { return Run{{intersectSelf(f0, on(Backend::Cuda)).pairs}, cuda::lastQueryProfile()}; },
+      [&] {
+        return Run{{intersectMeshes(f0, f1, on(Backend::Cuda)).pairs}, cuda::lastQueryProfile()};
+      },
+      [&] {
+        return Run{{intersectMeshes(soup_a, soup_b, on(Backend::Cuda)).pairs},
+                   cuda::lastQueryProfile()};
+      },
+      [&] {
+        const AllPairsResult all = intersectAll(f0, f1, on(Backend::Cuda));
+        return Run{{all.self_a.pairs, all.self_b.pairs, all.inter.pairs}, cuda::lastQueryProfile()};
+      },
+      [&] { return Run{{intersectSelf(crowd, on(Backend::Cuda)).pairs}, cuda::lastQueryProfile()}; }};
+  const char* names[] = {"cloth self", "two cloth frames", "soups, b rotated", "joint frames",
+                         "crowded soup self"};
+  const std::size_t work[] = {f0.numTriangles(), 2 * f0.numTriangles(), 5000,
+                              2 * f0.numTriangles(), crowd.numTriangles()};
+  auto same = [](const Run& r, const Run& one, const std::string& at) {
+    EXPECT_GT(r.profile.rounds, 1) << at;
+    EXPECT_EQ(r.profile.candidates, one.profile.candidates) << at;
+    EXPECT_EQ(r.profile.exact_tests, one.profile.exact_tests) << at;
+    EXPECT_EQ(r.profile.cell_candidates, one.profile.cell_candidates) << at;
+    EXPECT_EQ(r.pairs, one.pairs) << at;
+  };
+  struct Mode {
+    const char* cells;
+    const char* scan;
+  };
+  for (const Mode mode : {Mode{"1", nullptr}, Mode{"0", nullptr}, Mode{"0", "tile"}}) {
+    kdet_test::ScopedEnv cells("KDET_FCL_CUDA_SELF_CELLS", mode.cells),
+        scan("KDET_FCL_CUDA_SCAN", mode.scan);
+    for (std::size_t q = 0; q < std::size(queries); ++q) {
+      const std::string what = std::string(names[q]) + ", cells " + mode.cells + ", scan " +
+                               (mode.scan ? mode.scan : "warp");
+      Run one;
+      {
+        kdet_test::ScopedEnv limit("KDET_FCL_CUDA_ROUND_CANDIDATES", "0");
+        one = queries[q]();
+      }
+      ASSERT_EQ(one.profile.rounds, 1) << what;
+      ASSERT_GT(one.profile.candidates, 2 * work[q]) << what;  // so that k = 1, 2 need rounds
+      for (const char* k : {"1", "2"}) {
+        kdet_test::ScopedEnv limit("KDET_FCL_CUDA_ROUND_CANDIDATES", k);
+        const Run r = queries[q]();
+        same(r, one, what + ", limit " + k);
+        EXPECT_EQ(r.profile.passes, 1) << what << ", limit " << k;  // planned from the density
+      }
+      // From a fresh start (no density known) with every buffer forced to overflow: the first
+      // pass (one round) overflows, later ones run in rounds (the pair and survivor buffers may
+      // take another pass or two to grow to what the rounds find).
+      cuda::releaseDeviceMemory();
+      kdet_test::ScopedEnv limit("KDET_FCL_CUDA_ROUND_CANDIDATES", "1"),
+          cap("KDET_FCL_CUDA_PAIR_CAPACITY", "7");
+      const Run r = queries[q]();
+      same(r, one, what + ", learnt from an overflow");
+      EXPECT_GE(r.profile.passes, 2) << what;
+    }
+  }
+  // The crowded soup from a fresh start with one candidate per triangle and round: the candidate
+  // buffer (which also holds the build's sort scratch) stays far below all the candidates, which
+  // are more than four times its first reservation (at least 2^16; checked).
+  cuda::releaseDeviceMemory();
+  kdet_test::ScopedEnv limit("KDET_FCL_CUDA_ROUND_CANDIDATES", "1");
+  const Run r = queries[4]();
+  const std::string report = cuda::deviceMemoryReport();
+  const std::string key = "cands (+ build sort scratch) ";
+  const std::size_t at = report.find(key);
+  ASSERT_NE(at, std::string::npos) << report;
+  const std::size_t cand_bytes = std::stoull(report.substr(at + key.size()));
+  ASSERT_GT(r.profile.candidates, 4u << 16);
+  EXPECT_GT(r.profile.rounds, 4);
+  EXPECT_LT(cand_bytes, r.profile.candidates * sizeof(unsigned long long) / 2) << report;
+  cuda::setProfiling(false);
+#endif
+}
+
 TEST(CudaQuery, PlaneFilterCountsAndBytesPerTriangle) {
   // Not a timing: reports how many candidates reach the exact test and the device memory per
   // triangle on the UNC cloth ball (or a draped cloth without the data), and checks the counts'
