@@ -793,9 +793,9 @@ TYPED_TEST(CudaQueryTyped, QueriesInRoundsFindTheSameCandidatesAndPairsInLessMem
   // candidate buffer. Every query kind and scan must give the one-round query's candidates, exact
   // tests and pairs: self (cells' pairs on and off, the tile scan), inter (identity and rotated
   // poses) and joint. With the density of an earlier query the rounds are planned (one pass);
-  // from a fresh start, an overflow teaches them (a second pass), also with every buffer forced
-  // to overflow. And a crowded soup's self query in many rounds holds well under all of its
-  // candidates at once.
+  // from a fresh start with every buffer forced to overflow, the overflow teaches them (a second
+  // pass, or more while the pair and survivor buffers grow to what the rounds find). And a
+  // crowded soup's self query in many rounds holds well under all of its candidates at once.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
