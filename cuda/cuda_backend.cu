@@ -83,7 +83,7 @@ enum PairCountWord : int {
   kAllCands = 8,     // candidates of all rounds
   kMaxSurv = 9,      // the most survivors of one round
   kAllSurv = 10,     // survivors of all rounds
-  kCellCands = 11,   // of all candidates, the cells' (profiling only: addCountKernel)
+  kCellCands = 11,   // of all candidates, the cells' (addCountKernel)
   kPairCountWords = 12
 };
 constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
@@ -453,11 +453,17 @@ __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, s
 /// One round of a query pass: phase 1, filter and exact tests of one contiguous range of the
 /// candidate search's tasks (runQuery: a query whose candidates would not fit in the candidate
 /// buffer's limit runs in several rounds, each reusing the buffer; the pairs add up across
-/// rounds). The ranges partition the tasks in order. (Strided shares, round r taking the tasks
-/// r, r + count, ..., were measured slower: benchmarks/RESULTS-gpu.md.)
+/// rounds). The ranges partition the tasks in order. `stage` 0: the range applies to each
+/// phase-1 kernel of the query; a self query that takes its same-level pairs from the cells may
+/// instead run its stages in rounds of their own: stage 1 runs only the cells' kernel, stage 2
+/// only the scan, each over its range (index of count) of that kernel's tasks, so that a kernel
+/// is split only when its own candidates exceed the limit. (Strided shares, round r taking the
+/// tasks r, r + count, ..., were measured slower: benchmarks/RESULTS-gpu.md.)
 struct Round {
   std::uint32_t index;
   std::uint32_t count;
+  std::uint32_t stage;
+  std::uint32_t serial;  // the round's place in its pass (Context::markRound)
 };
 
 /// How many of `tasks` tasks fall to the round (host and device agree).
@@ -1085,6 +1091,9 @@ struct CachedMesh {
   // Candidates per query triangle of the last self query of this mesh and of the last inter
   // query it took part in (spansFor()).
   double self_density = 0, inter_density = 0;
+  // Of the last self query's candidates, the share that the cells' pairs gave (runQuery's
+  // stages).
+  double self_cell_share = 0;
   // `builds` counts the geometries this entry has held (rebuild()): the geometry of the kept
   // self result (detail::KeptSelfResult's rule: a rigid mesh's self query runs on the device
   // twice, then never again; a mesh with new geometry at every self query never keeps one).
@@ -1785,6 +1794,32 @@ std::uint32_t roundsFor(double candidates, std::size_t limit) {
   return r >= kMaxRounds ? kMaxRounds : static_cast<std::uint32_t>(r);
 }
 
+/// The rounds of a query pass (runQuery): `rounds` rounds of stage 0, or, `staged`, first_rounds
+/// of stage 1 (the cells' pairs) then second_rounds of stage 2 (the scan).
+struct RoundPlan {
+  bool staged = false;
+  std::uint32_t rounds = 1, first_rounds = 0, second_rounds = 0;
+  std::uint32_t total() const { return staged ? first_rounds + second_rounds : rounds; }
+  Round at(std::uint32_t r) const {
+    if (!staged) return Round{r, rounds, 0, r};
+    return r < first_rounds ? Round{r, first_rounds, 1, r}
+                            : Round{r - first_rounds, second_rounds, 2, r};
+  }
+  /// The plan for `all` candidates of which `first` come from the first stage (stages: the query
+  /// has two): one round while they fit in the limit; else, with stages, each stage in its own
+  /// rounds (two rounds, no kernel split, while each stage fits), else ranges of every kernel.
+  static RoundPlan make(double all, double first, bool stages, std::size_t limit) {
+    RoundPlan p;
+    p.rounds = roundsFor(all, limit);
+    if (p.rounds > 1 && stages) {
+      p.staged = true;
+      p.first_rounds = roundsFor(first, limit);
+      p.second_rounds = roundsFor(all - first, limit);
+    }
+    return p;
+  }
+};
+
 /// Runs `launch(cand, survivors, out, round)` (it returns whether the plane filter ran) for each
 /// round of a pass, until every pair fits (overflow: grow, or more rounds; rerun), then sorts the
 /// pairs on the device and copies the first max_pairs (or all) of the sorted order into the
@@ -1801,8 +1836,9 @@ std::uint32_t roundsFor(double candidates, std::size_t limit) {
 /// order, as the three separate queries give them.
 template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
-                     std::size_t work, double density, const QueryOptions& options,
-                     std::uint32_t split = 0, QueryResult* parts = nullptr) {
+                     std::size_t work, double density, double first_share, bool stages,
+                     const QueryOptions& options, std::uint32_t split = 0,
+                     QueryResult* parts = nullptr) {
   const cudaStream_t s = ctx.stream;
   ctx.cands.reserve(std::max<std::size_t>(std::size_t(1) << 16, 8 * work));
   ctx.pairs.reserve(std::max<std::size_t>(std::size_t(1) << 16, work));
@@ -1818,7 +1854,8 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     surv_cap = std::min(surv_cap, knob);
   }
   const std::size_t limit = roundCandidateLimit(work);
-  std::uint32_t rounds = roundsFor(density * double(work), limit);
+  RoundPlan plan =
+      RoundPlan::make(density * double(work), first_share * density * double(work), stages, limit);
   unsigned long long n = 0;
   int passes = 0;
   unsigned long long* const w = ctx.pair_count.data();
@@ -1827,12 +1864,12 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     ++passes;
     CUDA_TRY(cudaMemsetAsync(w, 0, kPairCountWords * sizeof(unsigned long long), s));
     bool filtered = false;
+    const std::uint32_t rounds = plan.total();
     for (std::uint32_t r = 0; r < rounds; ++r) {
       if (r > 0) ctx.markRound(r, 0);
       filtered = launch(PairSink{ctx.cands.data(), w + kCandCount, cand_cap, 32},
                         PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32},
-                        PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits},
-                        Round{r, rounds});
+                        PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits}, plan.at(r));
       checkLaunch();
       if (rounds > 1) {
         roundEndKernel<<<1, 1, 0, s>>>(w);
@@ -1855,6 +1892,8 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     ctx.profile.candidates = nc_all;
     ctx.profile.exact_tests = ns_all;
     ctx.profile.rounds = static_cast<int>(rounds);
+    ctx.profile.cell_rounds = static_cast<int>(plan.staged ? plan.first_rounds : 0);
+    ctx.profile.cell_candidates = h[kCellCands];
     if (nc <= cand_cap && n <= cap && (!filtered || ns <= surv_cap)) break;
     // The device counted everything it could not store: grow and rerun (no pair is dropped).
     if (nc > 0x7FFFFFFFull || n > 0x7FFFFFFFull)
@@ -1866,9 +1905,15 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     if (nc > cand_cap) {
       // More rounds, each within the limit; or, when more rounds would not help (a round's
       // share was crowded, or the rounds are at their maximum), a larger buffer.
-      const std::uint32_t more = roundsFor(double(nc_all), limit);
-      if (more > rounds) {
-        rounds = more;
+      RoundPlan more = RoundPlan::make(double(nc_all), double(h[kCellCands]), stages, limit);
+      if (more.staged ? (!plan.staged || more.first_rounds > plan.first_rounds ||
+                         more.second_rounds > plan.second_rounds)
+                      : more.rounds > rounds) {
+        if (more.staged && plan.staged) {  // never fewer rounds for a stage than before
+          more.first_rounds = std::max(more.first_rounds, plan.first_rounds);
+          more.second_rounds = std::max(more.second_rounds, plan.second_rounds);
+        }
+        plan = more;
         ctx.cands.reserve(limit, false);
       } else {
         ctx.cands.reserve(nc);
@@ -1951,7 +1996,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     ctx.profile.output_ms = t23;
     ctx.profile.total_ms = t03;
     // Phase 1 and the filter of every round of the last pass (round 0 from event 1).
-    for (std::uint32_t r = 0; r < rounds; ++r) {
+    for (std::uint32_t r = 0; r < plan.total(); ++r) {
       float tc = 0, tf = 0;
       CUDA_TRY(cudaEventElapsedTime(&tc, r == 0 ? ctx.ev[1] : ctx.round_ev[3 * r],
                                     ctx.round_ev[3 * r + 1]));
@@ -1959,7 +2004,6 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       ctx.profile.candidates_ms += tc;
       ctx.profile.filter_ms += tf;
     }
-    ctx.profile.cell_candidates = h[kCellCands];
     ctx.profile.passes = passes;
     ctx.profile.pairs = n;
   }
@@ -2302,13 +2346,13 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
       });
     }
     checkLaunch();
-    ctx.markRound(round.index, 1);
+    ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
       launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, surv);
       in = surv;
     }
-    ctx.markRound(round.index, 2);
+    ctx.markRound(round.serial, 2);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
       interExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
@@ -2319,7 +2363,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
                            {sourceOf(&a.mesh()), sourceOf(&b.mesh())}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,
-                             std::max(A.inter_density, B.inter_density), options);
+                             std::max(A.inter_density, B.inter_density), 0.0, false, options);
   A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
   return res;
 }
@@ -2347,7 +2391,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     const HashView<S> mv = M.view();
     ctx.profile.cells_by_size = M.size_ordered;
     bindInfo<S>(s, M, nullptr);
-    if (cell_pairs) {
+    if (cell_pairs && round.stage != 2) {
       const auto kernel = spans ? selfCellPairsKernel<S, true> : selfCellPairsKernel<S, false>;
       const std::uint32_t rows = cellRows(M.info.entries, M.self_density);
       ctx.profile.cell_rows = static_cast<int>(rows);
@@ -2357,39 +2401,39 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
                                             M.pending ? M.pending_cell_cap : M.cell_cap, rows,
                                             warpVisit(), split, round, cand, ctx.cellTasks());
       checkLaunch();
-      if (ctx.profiling) {  // the round's candidates so far are the cells' (cell_candidates)
-        addCountKernel<<<1, 1, 0, s>>>(cand.count, ctx.pair_count.data() + kCellCands);
-        checkLaunch();
+      // The round's candidates so far are the cells' (cell_candidates; the stages' rounds).
+      addCountKernel<<<1, 1, 0, s>>>(cand.count, ctx.pair_count.data() + kCellCands);
+      checkLaunch();
+    }
+    if (round.stage != 1) {  // (stage 1: only the cells' pairs in this round)
+      if (warp) {
+        const auto kernel =
+            spans ? selfCandidatesWarpKernel<S, 8, true> : selfCandidatesWarpKernel<S, 8, false>;
+        const unsigned int log_p = warpLanesLog2(n, M.self_density);
+        ctx.profile.warp_lanes = 1 << log_p;
+        const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
+        const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
+        kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip, split,
+                                                 round, cand, wl.tasks);
+      } else {
+        withTile([&](auto g, auto mb) {
+          constexpr int G = decltype(g)::value;
+          constexpr int MB = decltype(mb)::value;
+          const auto kernel =
+              spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
+          kernel<<<std::max(1u, blocksFor(G * roundTasks(n, round), kQueryBlock)), kQueryBlock,
+                   0, s>>>(mv, un, M.size_ordered, level_skip, split, round, cand);
+        });
       }
     }
-    if (warp) {
-      const auto kernel =
-          spans ? selfCandidatesWarpKernel<S, 8, true> : selfCandidatesWarpKernel<S, 8, false>;
-      const unsigned int log_p = warpLanesLog2(n, M.self_density);
-      ctx.profile.warp_lanes = 1 << log_p;
-      const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
-      const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
-      kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip, split,
-                                               round, cand, wl.tasks);
-    } else {
-      withTile([&](auto g, auto mb) {
-        constexpr int G = decltype(g)::value;
-        constexpr int MB = decltype(mb)::value;
-        const auto kernel =
-            spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
-        kernel<<<std::max(1u, blocksFor(G * roundTasks(n, round), kQueryBlock)), kQueryBlock, 0,
-                 s>>>(
-            mv, un, M.size_ordered, level_skip, split, round, cand);
-      });
-    }
     checkLaunch();
-    ctx.markRound(round.index, 1);
+    ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
       launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, surv);
       in = surv;
     }
-    ctx.markRound(round.index, 2);
+    ctx.markRound(round.serial, 2);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
       selfExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
@@ -2399,8 +2443,11 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   };
   PendingBuilds<S> pending{ctx, {&M, nullptr}, {src, MeshSource<S>{}}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, M.self_density,
-                             options, split, parts);
+                             M.self_cell_share, cell_pairs, options, split, parts);
   M.self_density = double(ctx.profile.candidates) / double(n);
+  M.self_cell_share = ctx.profile.candidates > 0 ? double(ctx.profile.cell_candidates) /
+                                                       double(ctx.profile.candidates)
+                                                 : 0.0;
   return res;
 }
 

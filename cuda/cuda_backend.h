@@ -116,6 +116,8 @@ struct QueryProfile {
   int passes = 0;         ///< query passes (> 1 after an output overflow)
   int rounds = 0;         ///< rounds of the last pass (> 1: the candidates were found and tested
                           ///< in parts, KDET_FCL_CUDA_ROUND_CANDIDATES)
+  int cell_rounds = 0;    ///< of them, the rounds of the cells' pairs alone, the others being
+                          ///< the scan's (0: every round ran both; a self query with cells)
   std::size_t pairs = 0;  ///< pairs found (before max_pairs truncation)
   std::size_t candidates = 0;  ///< candidate pairs of phase 1 (before the plane filter)
   std::size_t exact_tests = 0;  ///< pairs that reached the exact test (after the plane filter)
