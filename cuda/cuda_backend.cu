@@ -23,7 +23,8 @@
 // pairs, sorted pairs), which are idle during a build; the filter's survivors use the sorted-pair
 // buffer, idle until the final sort. A query with more candidates than 14 per query
 // triangle runs phase 1, the filter and phase 2 in rounds over ranges of its tasks, which reuse
-// the candidate and survivor buffers (runQuery, roundsFor), all queued before the one read-back.
+// the candidate and survivor buffers (runQuery, RoundPlan), all queued before the one read-back;
+// a self query with the cells' pairs runs each of its two phase-1 kernels in rounds of its own.
 // benchmarks/RESULTS-gpu.md has the measurements behind these choices.
 
 #include <cooperative_groups.h>
