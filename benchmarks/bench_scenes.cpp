@@ -1,4 +1,5 @@
 #include "bench_scenes.h"
+#include "mesh_append.h"
 
 #include <algorithm>
 #include <cmath>
@@ -49,12 +50,6 @@ Mesh mergedWorld(const Scene& s, std::size_t f) {
 namespace {
 
 MeshPtr share(Mesh m) { return std::make_shared<const Mesh>(std::move(m)); }
-
-void append(Mesh& dst, const Mesh& src) {
-  const auto base = static_cast<std::uint32_t>(dst.vertices.size());
-  dst.vertices.insert(dst.vertices.end(), src.vertices.begin(), src.vertices.end());
-  for (const Triangle& t : src.triangles) dst.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-}
 
 // A capped-free tube (a "pipe") from a to b, `around` segments around and `along` along: with few
 // segments along, its triangles are long and thin, as in CAD exports.
@@ -201,7 +196,7 @@ Scene nbodyScene(int per_axis, int seg, int frames) {
                               0.08 * std::sin(2 * M_PI * t + phase[i].z)};
       Mesh b = ball;
       for (V& v : b.vertices) v = v + c;
-      append(m, b);
+      appendMesh(m, b);
     }
     s.frames.push_back({{share(std::move(m))}, {Pose::identity()}});
   }
@@ -223,7 +218,7 @@ Scene chairScene(int cloth_n, int frames, std::size_t nominal) {
   s.inter = {{0, 1}};
   Mesh chair;
   const double r = 0.02, h = 1.0, w = 0.5;
-  const auto pipe = [&](V a, V b) { append(chair, makePipe(a, b, r, 12, 1)); };
+  const auto pipe = [&](V a, V b) { appendMesh(chair, makePipe(a, b, r, 12, 1)); };
   for (double x : {-w, w})
     for (double y : {-w, w}) pipe({x, y, 0}, {x, y, h});                    // legs
   pipe({-w, -w, h}, {w, -w, h}); pipe({-w, w, h}, {w, w, h});              // seat frame

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "kdet_fcl/predicate.h"
+#include "mesh_append.h"
 #include "kdet_fcl/query.h"
 #include "kdet_fcl/triangle_mesh.h"
 #include "kdet_fcl/vec3.h"
@@ -109,12 +110,7 @@ template <class S>
 kdet_fcl::TriangleMesh<S> jointMesh(const kdet_fcl::TriangleMesh<S>& a,
                                     const kdet_fcl::TriangleMesh<S>& b) {
   kdet_fcl::TriangleMesh<S> m = a;
-  m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
-  const auto shift = static_cast<std::uint32_t>(a.vertices.size());
-  for (kdet_fcl::Triangle t : b.triangles) {
-    for (auto& v : t) v += shift;
-    m.triangles.push_back(t);
-  }
+  kdet_bench::appendMesh(m, b);
   return m;
 }
 

@@ -346,7 +346,6 @@ AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
   return r;
 }
 
-
 template QueryResult intersectMeshes(const HashedMesh<float>&, const HashedMesh<float>&,
                                      const QueryOptions&);
 template QueryResult intersectMeshes(const HashedMesh<double>&, const HashedMesh<double>&,
