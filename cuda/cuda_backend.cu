@@ -28,6 +28,7 @@
 // benchmarks/RESULTS-gpu.md has the measurements behind these choices.
 
 #include <cooperative_groups.h>
+#include <cooperative_groups/reduce.h>
 #include <cuda_runtime_api.h>
 
 #include <cub/device/device_radix_sort.cuh>
@@ -416,6 +417,49 @@ __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restr
   while (atomicCAS(&slots[s], kEmptySlot, val) != kEmptySlot) s = s + 1 == slot_count ? 0u : s + 1;
 }
 
+/// A tile of G lanes per stored cell: which of the kUpperLevels levels above the cell's own hold
+/// the cell's ancestor there (the cell containing it: coordinates shifted right by the
+/// difference, see selfQueryLevels; lane r looks up levels own + r + 1, own + r + 1 + G, ...),
+/// ORed by the lanes into HashView::upper of every triangle stored in the cell, with the valid
+/// bit. `upper` must be zero before. Every triangle of the cell lies on the cell's level, and its
+/// cells there are its cell range, so a triangle's bits end up as the levels above its own that
+/// hold a cell of its range. Nothing is written unless the whole build was stored (not after
+/// need_sync, nor when the entries or cells exceed `entry_cap` or `cell_cap`): a triangle with
+/// some cells missing must keep its valid bit clear (such a build's query is rerun anyway).
+/// G = kUpperTile (ncu, H100: 8 lanes took 18-21 us on the UNC cloth ball and 23-42 us on the
+/// 1M cloth's frames; one lane per cell 34-39 and 30-44 us, 4 lanes 25 and 25-40, 32 lanes 13-14
+/// and 41-91: crowded cells want more lanes, light ones fewer).
+constexpr int kUpperTile = 8;
+template <class S, int G>
+__global__ void upperLevelsKernel(HashView<S> M, const BuildInfo* __restrict__ info_p,
+                                  std::uint32_t entry_cap, std::uint32_t cell_cap,
+                                  std::uint32_t* __restrict__ upper) {
+  const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
+  const unsigned long long c =
+      (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G;
+  const unsigned int lane = tile.thread_rank();
+  const BuildInfo& info = *info_p;
+  if (info.need_sync || info.entries > entry_cap || info.cells > cell_cap || c >= info.cells)
+    return;  // tile-uniform
+  const detail::CellId id =
+      M.key_words == 1
+          ? compactKeyCell(__ldg(M.cell_key + c), info.coord_bits)
+          : detail::cellOfKey(CellKey{__ldg(M.cell_key + 2 * c), __ldg(M.cell_key + 2 * c + 1)});
+  std::uint32_t bits = kUpperValid;
+  for (int k = static_cast<int>(lane) + 1; k <= kUpperLevels && id.level + k <= info.top_level;
+       k += G) {
+    const int L = id.level + k;
+    if (((info.level_mask >> L) & 1ull) && findCell(M, info, L, id.x >> k, id.y >> k, id.z >> k) >= 0)
+      bits |= 1u << k;
+  }
+  if (G > 1) bits = cg::reduce(tile, bits, cg::bit_or<std::uint32_t>());
+  const std::uint32_t end = __ldg(M.cell_begin + c + 1);
+  for (std::uint32_t e = __ldg(M.cell_begin + c) + lane; e < end; e += G) {
+    const std::uint32_t tri = __ldg(M.entry_tri + e) & kEntryTriMask;
+    atomicOr(upper + (tri >> 1), bits << (16u * (tri & 1u)));
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Query kernels
 // ---------------------------------------------------------------------------------------------
@@ -584,7 +628,9 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     const Aabb<double> q =
         detail::triangleBox<double>(va[A.t[3 * i]], va[A.t[3 * i + 1]], va[A.t[3 * i + 2]]);
     scanCandidatesGroup<kSpans>(
-        B, cInfo(1), q, di, b_ordered, 0, tile, [&](std::uint32_t, double dj) { return dj >= di; },
+        B, cInfo(1), q, di, b_ordered,
+        levelsFrom(cInfo(1).level_mask, detail::levelFor(di, cInfo(1).grid)), tile,
+        [&](std::uint32_t, double dj) { return dj >= di; },
         [&](std::uint32_t j) { emitPair(cand, i, j); });
   } else {
     const std::uint32_t j = idx - na;
@@ -592,14 +638,16 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     if (dj >= cInfo(0).d_max) return;  // nothing in A is strictly larger
     const Aabb<double> q = boxInA(B, j, identity, b_to_a, eps_coef, eps_tmag);
     scanCandidatesGroup<kSpans>(
-        A, cInfo(0), q, dj, a_ordered, 0, tile, [&](std::uint32_t, double di) { return di > dj; },
+        A, cInfo(0), q, dj, a_ordered,
+        levelsFrom(cInfo(0).level_mask, detail::levelFor(dj, cInfo(0).grid)), tile,
+        [&](std::uint32_t, double di) { return di > dj; },
         [&](std::uint32_t i) { emitPair(cand, i, j); });
   }
 }
 
 /// Phase 1 of a self query: triangle i against the triangles j with (d_j, j) > (d_i, i), on its
 /// own level and every coarser one, or (level_skip = 1, after selfCellPairsKernel) only on the
-/// coarser ones.
+/// coarser ones; of those, only the levels that hold a cell of its range (selfQueryLevels).
 template <class S, int G, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesKernel(HashView<S> M, std::uint32_t n, bool ordered, int level_skip,
@@ -611,7 +659,8 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
   const auto i = static_cast<std::uint32_t>(roundTask(k, n, round));
   const double di = M.diam[i];
   scanCandidatesGroup<kSpans>(
-      M, cInfo(0), boxOf(M, i), di, ordered, level_skip, tile,
+      M, cInfo(0), boxOf(M, i), di, ordered,
+      selfQueryLevels(M, cInfo(0), i, detail::levelFor(di, cInfo(0).grid), level_skip), tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
         if (selfCandidate(M, split, i, j)) emitPair(cand, i, j);
@@ -671,14 +720,17 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     WarpQuery mine;
     mine.id = i;
     mine.d = 0;
+    mine.levels = 0;
     mine.live = 0;
     if (i < n) {
       mine.d = M.diam[i];
       mine.box = detail::intersectBoxes(boxOf(M, i), cInfo(0).bounds);
+      mine.levels = selfQueryLevels(M, cInfo(0), i, detail::levelFor(mine.d, cInfo(0).grid),
+                                    level_skip);
       mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
     }
     scanCandidatesWarp<kSpans>(
-        M, cInfo(0), q, mine, log_p, max_visit, level_skip,
+        M, cInfo(0), q, mine, log_p, max_visit,
         [&](const WarpQuery& o, std::uint32_t j, double dj) {
           return dj > o.d || (dj == o.d && j > o.id);
         },
@@ -824,6 +876,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     WarpQuery mine;
     mine.id = idx;
     mine.d = 0;
+    mine.levels = 0;
     mine.live = 0;
     const BuildInfo& target = cInfo(a_side ? 1 : 0);
     if (idx < nq) {
@@ -839,16 +892,17 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       // Nothing in the other mesh is large enough (A: d_j >= d_i; B: d_i > d_j).
       const bool none = a_side ? mine.d > cInfo(1).d_max : mine.d >= cInfo(0).d_max;
       mine.box = detail::intersectBoxes(box, target.bounds);
+      mine.levels = levelsFrom(target.level_mask, detail::levelFor(mine.d, target.grid));
       mine.live = (none || detail::isEmpty(mine.box)) ? 0u : 1u;
     }
     if (a_side)
       scanCandidatesWarp<kSpans>(
-          B, target, q, mine, log_p, max_visit, 0,
+          B, target, q, mine, log_p, max_visit,
           [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
           [&](const WarpQuery& o, std::uint32_t j) { emitPair(cand, o.id, j); });
     else
       scanCandidatesWarp<kSpans>(
-          A, target, q, mine, log_p, max_visit, 0,
+          A, target, q, mine, log_p, max_visit,
           [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
           [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
   });
@@ -1075,6 +1129,8 @@ struct CachedMesh {
   DeviceBuffer<std::uint32_t> block_cell;     // the cell of every 32nd entry (cellsKernel)
   DeviceBuffer<unsigned long long> cell_key;  // key_words per cell
   DeviceBuffer<unsigned long long> slots;
+  DeviceBuffer<std::uint32_t> upper;  // HashView::upper (upperLevelsKernel), 2 bytes per triangle
+  bool upper_ready = false;           // the last build wrote `upper` (else queries scan all levels)
   DeviceBuffer<BuildInfo> dinfo;  // this mesh's grid and sizes, on the device
   PinnedBuffer staging;  // vertex/triangle uploads (per mesh: two uploads can be in flight)
   std::uint32_t slot_count = 0;
@@ -1122,6 +1178,7 @@ struct CachedMesh {
     h.cell_begin = cell_begin.data();
     h.cell_key = cell_key.data();
     h.slots = slots.data();
+    h.upper = upper_ready ? upper.data() : nullptr;
     h.slot_count = slot_count;
     h.key_words = key_words;
     return h;
@@ -1129,7 +1186,7 @@ struct CachedMesh {
   std::size_t bytes() const {
     return v.bytes() + t.bytes() + box.bytes() + diam.bytes() + level.bytes() +
            entry_tri.bytes() + entry_span.bytes() + cell_begin.bytes() + block_cell.bytes() +
-           cell_key.bytes() + slots.bytes() + dinfo.bytes();
+           cell_key.bytes() + slots.bytes() + upper.bytes() + dinfo.bytes();
   }
 };
 
@@ -1289,6 +1346,18 @@ std::uint32_t rehashCap(std::uint32_t cap) {
   const unsigned long long k = (e && *e) ? std::strtoull(e, nullptr, 10) : 0;
   return k > 0 && k < cap ? static_cast<std::uint32_t>(k) : cap;
 }
+
+/// Whether the environment variable `name` is set and starts with '0' (a knob turned off; read at
+/// every call): KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off,
+/// KDET_FCL_CUDA_UPPER_LEVELS=0 the levels above each triangle (upperLevelsOn).
+bool envFlag0(const char* name) {
+  const char* e = std::getenv(name);
+  return e && *e == '0';
+}
+
+/// Whether a build records, per triangle, the levels above its own that hold a cell of its range
+/// (upperLevelsKernel; on unless KDET_FCL_CUDA_UPPER_LEVELS=0).
+bool upperLevelsOn() { return !envFlag0("KDET_FCL_CUDA_UPPER_LEVELS"); }
 
 /// The device part of rebuild() after the uploads: everything a re-hash without read-back
 /// enqueues (and, for a build with read-backs, the read-backs too). Allocates only where a
@@ -1501,6 +1570,19 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
                                                   m.cell_key.data(), m.slots.data(), m.slot_count,
                                                   m.block_cell.data());
   checkLaunch();
+  // The levels above each triangle's own that hold a cell of its range (self queries skip the
+  // others without a lookup). KDET_FCL_CUDA_UPPER_LEVELS=0 leaves them out (every level scanned).
+  m.upper_ready = upperLevelsOn();
+  if (m.upper_ready) {
+    m.upper.reserve((nt + 1) / 2, false);
+    CUDA_TRY(cudaMemsetAsync(m.upper.data(), 0, ((nt + 1) / 2) * sizeof(std::uint32_t), s));
+    const std::uint32_t ccap = async ? cell_cap : m.cell_cap;
+    upperLevelsKernel<S, kUpperTile><<<blocksFor(std::max<std::uint32_t>(ccap, 1),
+                                                 kBuildBlock / kUpperTile),
+                                       kBuildBlock, 0, s>>>(m.view(), dinfo, cap, ccap,
+                                                            m.upper.data());
+    checkLaunch();
+  }
   m.pending = async;
   m.pending_entry_cap = cap;
   m.pending_cell_cap = async ? cell_cap : m.cell_cap;
@@ -1509,11 +1591,6 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
 }
 
 
-/// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
-bool envFlag0(const char* name) {
-  const char* e = std::getenv(name);
-  return e && *e == '0';
-}
 
 /// Grows, before a graph capture, every buffer that buildOnDevice(async) could grow (the same
 /// sizes it asks for), so that nothing allocates while the stream is captured.
@@ -1523,6 +1600,7 @@ void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   m.box.reserve(nt, false);
   m.diam.reserve(nt, false);
   m.level.reserve(nt, false);
+  if (upperLevelsOn()) m.upper.reserve((nt + 1) / 2, false);
   const std::size_t n4 = (nt + 1 + 63) & ~std::size_t(63);
   ctx.pairs_sorted.reserve(2 * n4);
   ctx.pairs.reserve(3 * n4 / 2);
@@ -1561,7 +1639,8 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   const std::vector<std::uintptr_t> key = {
       nt, cap, cell_cap, m.slot_count, std::uintptr_t(m.sort_bits), std::uintptr_t(g_num_sms),
       std::uintptr_t(m.size_ordered),
-      std::uintptr_t(ctx.red_ready),
+      std::uintptr_t(ctx.red_ready), std::uintptr_t(upperLevelsOn()),
+      reinterpret_cast<std::uintptr_t>(m.upper.data()),
       reinterpret_cast<std::uintptr_t>(m.v.data()), reinterpret_cast<std::uintptr_t>(m.t.data()),
       reinterpret_cast<std::uintptr_t>(m.box.data()),
       reinterpret_cast<std::uintptr_t>(m.diam.data()),
@@ -2563,6 +2642,25 @@ void markDeformed(const HashedMesh<S>& mesh) {
     if (m.owner == &mesh || m.owner2 == &mesh) m.force_vertices = true;
 }
 
+template <class S>
+std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh) {
+  Context& ctx = context();
+  std::lock_guard<std::mutex> lock(ctx.mutex);
+  for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
+    if (m.owner != &mesh || m.owner2 != nullptr || !m.valid || m.pending || !m.upper_ready)
+      continue;
+    std::vector<std::uint32_t> words((m.nt + 1) / 2);
+    CUDA_TRY(cudaMemcpyAsync(words.data(), m.upper.data(), words.size() * sizeof(std::uint32_t),
+                             cudaMemcpyDeviceToHost, ctx.stream));
+    CUDA_TRY(cudaStreamSynchronize(ctx.stream));
+    std::vector<std::uint16_t> bits(m.nt);
+    for (std::size_t i = 0; i < m.nt; ++i)
+      bits[i] = static_cast<std::uint16_t>(words[i / 2] >> (16 * (i % 2)));
+    return bits;
+  }
+  return {};
+}
+
 std::string deviceMemoryReport() {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
@@ -2572,7 +2670,7 @@ std::string deviceMemoryReport() {
     if (!r.empty()) r += ", ";
     r += std::string(name) + " " + std::to_string(b);
   };
-  std::size_t mesh[10] = {};
+  std::size_t mesh[11] = {};
   auto meshes = [&](const auto& list) {
     for (const auto& m : list) {
       mesh[0] += m.v.bytes();
@@ -2585,13 +2683,14 @@ std::string deviceMemoryReport() {
       mesh[7] += m.cell_key.bytes();
       mesh[8] += m.slots.bytes();
       mesh[9] += m.dinfo.bytes();
+      mesh[10] += m.upper.bytes();
     }
   };
   meshes(ctx.meshes_f);
   meshes(ctx.meshes_d);
-  const char* mesh_names[10] = {"v", "t", "box", "diam", "level", "entries", "cell_begin",
-                                "cell_key", "slots", "info"};
-  for (int k = 0; k < 10; ++k) add(mesh_names[k], mesh[k]);
+  const char* mesh_names[11] = {"v", "t", "box", "diam", "level", "entries", "cell_begin",
+                                "cell_key", "slots", "info", "upper"};
+  for (int k = 0; k < 11; ++k) add(mesh_names[k], mesh[k]);
   add("cub_temp", ctx.cub_temp.bytes());
   add("mapped", ctx.mapped_f.bytes() + ctx.mapped_d.bytes());
   add("cands (+ build sort scratch)", ctx.cands.bytes());
@@ -2624,6 +2723,8 @@ template bool intersectJoint(const HashedMesh<double>&, const HashedMesh<double>
                              const QueryOptions&, AllPairsResult*);
 template void markDeformed(const HashedMesh<float>&);
 template void markDeformed(const HashedMesh<double>&);
+template std::vector<std::uint16_t> upperLevels(const HashedMesh<float>&);
+template std::vector<std::uint16_t> upperLevels(const HashedMesh<double>&);
 
 }  // namespace cuda
 }  // namespace kdet_fcl

@@ -46,7 +46,9 @@
 // take the pairs within a level from the cells and scan only the coarser levels (default: the
 // cells for meshes of about 200k cell entries and more), and KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
 // entries per warp task of those cells' pairs (default 8 or 32 by the density; all read at every
-// query, for tests and comparisons). Uploads of deformed
+// query, for tests and comparisons). KDET_FCL_CUDA_UPPER_LEVELS=0 (read at every build) stops
+// the builds from recording, per triangle, the levels above its own that hold a cell of its
+// range, so self queries look up every level (upperLevels()). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
 // force the thread count and the chunk size (read at every upload). The pairs come back through
@@ -71,6 +73,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "kdet_fcl/hashed_mesh.h"
 #include "kdet_fcl/query.h"
@@ -152,6 +155,14 @@ QueryProfile lastQueryProfile();
 template <class S>
 void markDeformed(const HashedMesh<S>& mesh);
 
+/// Per triangle of `mesh`, the bits its last device build recorded for self queries: bit 0 set
+/// (recorded), and bit k (1..15) set when level own + k holds a cell of the triangle's cell range
+/// (levels above own + 15 are not recorded and always scanned). A self query scans only the
+/// levels so marked, with no lookup on the others; KDET_FCL_CUDA_UPPER_LEVELS=0 (read at every
+/// build) records nothing and scans every level. Empty when the mesh is not cached on the device
+/// on its own, or its build recorded nothing. For tests.
+template <class S>
+std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh);
 /// Bytes of device memory the backend holds now (cached meshes + scratch buffers).
 std::size_t deviceBytesInUse();
 

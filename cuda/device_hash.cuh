@@ -133,11 +133,49 @@ struct HashView {
   /// {hi, lo}. Either way a lookup compares the whole key.
   const unsigned long long* cell_key;
   const unsigned long long* slots;  ///< open addressing: (hash >> 32) << 32 | cell, or empty
+  /// Per triangle, 16 bits (triangle i in bits 16 * (i & 1) of word i / 2): the levels above its
+  /// own that hold a cell of its cell range (upperLevelsKernel in cuda_backend.cu). nullptr, or a
+  /// triangle's valid bit clear: not known, every level is scanned.
+  const std::uint32_t* upper;
   unsigned int slot_count;          ///< slots (any size; index = (low 32 hash bits * count) >> 32)
   int key_words;
 };
 
+/// A triangle's 16 bits in HashView::upper. Bit 0: valid; bit k (1..kUpperLevels): level own + k
+/// holds a cell of the triangle's cell range. Levels above own + kUpperLevels are not recorded.
+constexpr std::uint32_t kUpperValid = 1u;
+constexpr int kUpperLevels = 15;
+
+/// The levels of a hierarchy's level_mask at or above `from` (none when from > 63).
+__host__ __device__ __forceinline__ unsigned long long levelsFrom(unsigned long long level_mask,
+                                                                  int from) {
+  return from > 63 ? 0ull : level_mask & (~0ull << from);
+}
+
+
 #if defined(__CUDACC__)
+
+/// The levels that triangle i of level `own` must scan in a self query of its own hierarchy:
+/// from own + level_skip up, less the levels within kUpperLevels above its own whose cells in its
+/// range are all empty (HashView::upper). A triangle's cell range on a level L above its own is
+/// the set of the level-L cells that contain a cell of its own range (cell coordinates come from
+/// one rounded value scaled by a power of two per level, so each level's coordinate is the one
+/// below shifted right by a bit), so those ancestors, looked up once per cell of the build, tell
+/// which levels a query can skip without a lookup.
+template <class S>
+__device__ __forceinline__ unsigned long long selfQueryLevels(const HashView<S>& h,
+                                                              const BuildInfo& info,
+                                                              std::uint32_t i, int own,
+                                                              int level_skip) {
+  unsigned long long levels = levelsFrom(info.level_mask, own + level_skip);
+  if (h.upper == nullptr || own >= 63) return levels;
+  const std::uint32_t u = (__ldg(h.upper + (i >> 1)) >> (16u * (i & 1u))) & 0xFFFFu;
+  if (!(u & kUpperValid)) return levels;
+  // Bits own+1 .. own+kUpperLevels (those that fit in 64) are known; keep the occupied ones.
+  const unsigned long long known = ((1ull << kUpperLevels) - 1) << (own + 1);
+  const unsigned long long occupied = static_cast<unsigned long long>(u >> 1) << (own + 1);
+  return levels & (~known | occupied);
+}
 
 /// The cell index of cell (L, x, y, z), or -1 when no triangle occupies that cell. The 32 high
 /// hash bits in the slot only skip most mismatches cheaply; a match is confirmed on the full key
@@ -222,14 +260,15 @@ __device__ __forceinline__ bool entrySeenHere(std::uint32_t v, unsigned int ends
 /// near-misses; elsewhere the filter's setup costs more than it saves, so the host chooses:
 /// spansFor() in cuda_backend.cu). `size_ordered`: the cells of `h` list their triangles by
 /// decreasing diameter, so the scan of a cell ends at its first entry smaller than the query (else
-/// every entry is tested; smaller ones fail the size rule). `level_skip` = 1 leaves out the
-/// query's own level (a self query whose same-level pairs come from selfCellPairsKernel in
-/// cuda_backend.cu), 0 scans it. All arguments must be tile-uniform; every lane of the tile must
-/// call.
+/// every entry is tested; smaller ones fail the size rule). `levels`: the levels to scan, a subset
+/// of info.level_mask at or above the query's own level (levelsFrom() of it for every such
+/// level; a self query whose same-level pairs come from selfCellPairsKernel in cuda_backend.cu
+/// leaves out its own; selfQueryLevels() also leaves out the levels known to be empty around the
+/// query). All arguments must be tile-uniform; every lane of the tile must call.
 template <bool kSpans, class S, class Tile, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const BuildInfo& info,
                                                     const detail::Aabb<double>& qbox, double dq,
-                                                    bool size_ordered, int level_skip,
+                                                    bool size_ordered, unsigned long long levels,
                                                     const Tile& tile, Accept&& accept,
                                                     Emit&& emit) {
   constexpr unsigned int G = Tile::num_threads();
@@ -244,8 +283,8 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
   // size rule needs d_j >= d_query, so the scan of such a cell stops at the first entry of a
   // smaller sizeKey.
   const unsigned int qkey = sizeKeyOf(dq);
-  for (int L = detail::levelFor(dq, info.grid) + level_skip; L <= info.top_level; ++L) {
-    if (!((info.level_mask >> L) & 1ull)) continue;
+  for (; levels != 0; levels &= levels - 1) {
+    const int L = __ffsll(static_cast<long long>(levels)) - 1;
     const detail::CellRange r = detail::cellRange(clipped, L, info.grid);
     const std::uint32_t corners =
         kSpans ? detail::subcellSpanCorners(clipped, L, r, info.grid) : detail::kWholeCellSpan;
@@ -293,6 +332,8 @@ struct WarpQuery {
   /// scanCandidatesWarp).
   detail::Aabb<float> test;
   double d;                  ///< the query triangle's diameter
+  /// The levels to scan (as scanCandidatesGroup's `levels`).
+  unsigned long long levels;
   std::uint32_t id;          ///< the caller's index of the query triangle
   std::uint32_t live;        ///< 1: the lane has a query (0: idle lane, or an empty clipped box)
 };
@@ -343,12 +384,14 @@ struct LookupCursor {
 /// smaller bound only for tests: KDET_FCL_CUDA_WARP_VISIT.)
 constexpr std::uint32_t kMaxWarpVisit = 1u << 25;
 
-/// Moves the cursor to the first level >= L0 that holds triangles (past top_level if none).
+/// Moves the cursor to the first level >= L0 of `levels` (past top_level if none).
 template <bool kSpans>
 __device__ __forceinline__ void startLevel(LookupCursor& c, const detail::Aabb<double>& box,
-                                           const BuildInfo& info, int L0) {
-  for (int L = L0; L <= info.top_level; ++L) {
-    if (!((info.level_mask >> L) & 1ull)) continue;
+                                           const BuildInfo& info, unsigned long long levels,
+                                           int L0) {
+  const unsigned long long left = levelsFrom(levels, L0);
+  if (left != 0) {
+    const int L = __ffsll(static_cast<long long>(left)) - 1;
     const detail::CellRange r = detail::cellRange(box, L, info.grid);
     for (int a = 0; a < 3; ++a) {
       c.lo[a] = r.lo[a];
@@ -391,7 +434,7 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
         c.dz = 0;
         if (++c.dy > c.n[1]) {
           c.dy = 0;
-          if (++c.dx > c.n[0]) startLevel<kSpans>(c, mine.box, info, c.L + 1);
+          if (++c.dx > c.n[0]) startLevel<kSpans>(c, mine.box, info, mine.levels, c.L + 1);
         }
       }
     }
@@ -438,13 +481,13 @@ __device__ __forceinline__ int warpOwnerOf(std::uint32_t incl, std::uint32_t t) 
 /// after its diameter is loaded instead of ending the cell. A larger P gives a small query set more
 /// warps.
 /// accept(q_owner, j, d_j) and emit(q_owner, j) get the slot of the query that the entry is tested
-/// against. max_visit: 1..kMaxWarpVisit. level_skip as in scanCandidatesGroup. Every lane of the
-/// warp must call, with warp-uniform arguments except `query`.
+/// against. max_visit: 1..kMaxWarpVisit. The query's levels (query.levels) as scanCandidatesGroup's.
+/// Every lane of the warp must call, with warp-uniform arguments except `query`.
 template <bool kSpans, class S, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
                                                    WarpQuery* q,
                                                    const WarpQuery& query, unsigned int log_p,
-                                                   std::uint32_t max_visit, int level_skip,
+                                                   std::uint32_t max_visit,
                                                    Accept&& accept, Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
@@ -462,8 +505,7 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
   c.rest_begin = c.rest_end = c.rest_ends = 0;
   c.pos = 0;
   c.L = info.top_level + 1;
-  if (mine.live)
-    startLevel<kSpans>(c, mine.box, info, detail::levelFor(mine.d, info.grid) + level_skip);
+  if (mine.live) startLevel<kSpans>(c, mine.box, info, mine.levels, 0);
   while (true) {
     std::uint32_t begin = 0, qspan = detail::kWholeCellSpan;
     unsigned int ends = 0;

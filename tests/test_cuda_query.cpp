@@ -16,6 +16,7 @@
 #include <random>
 #include <string>
 
+#include "cpu/hierarchical_hash.h"
 #include "kept_self_scenario.h"
 #include "scoped_env.h"
 #include "test_util.h"
@@ -675,6 +676,115 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
           EXPECT_EQ(p.cell_candidates, 0u) << what;
           EXPECT_EQ(static_cast<long long>(p.candidates), candidates) << what;
         }
+      }
+    }
+  }
+  cuda::setProfiling(false);
+#endif
+}
+
+namespace {
+
+/// What cuda::upperLevels must hold for each triangle of `m`, from the CPU hash of the same mesh
+/// (the same grid and levels): bit 0, and bit k (1..15) when level own + k of the hierarchy holds
+/// a cell of the triangle's cell range there, found by looking up every cell of that range (the
+/// device finds it from the ancestors of the triangle's own cells instead).
+template <class S>
+std::vector<std::uint16_t> expectedUpperLevels(const HashedMesh<S>& m) {
+  const auto& h = m.hash();
+  std::vector<std::uint16_t> bits(h.numTriangles(), 1);
+  for (std::size_t i = 0; i < bits.size(); ++i) {
+    const int own = h.level[i];
+    const detail::Aabb<double> box = detail::intersectBoxes(h.boxes[i], h.bounds);
+    for (int k = 1; k <= 15 && own + k <= h.top_level; ++k) {
+      const int L = own + k;
+      if (!h.levelOccupied(L)) continue;
+      const detail::CellRange r = detail::cellRange(box, L, h.grid);
+      bool hit = false;
+      for (auto x = r.lo[0]; x <= r.hi[0] && !hit; ++x)
+        for (auto y = r.lo[1]; y <= r.hi[1] && !hit; ++y)
+          for (auto z = r.lo[2]; z <= r.hi[2] && !hit; ++z)
+            hit = h.find(detail::makeCellKey(L, x, y, z)) != nullptr;
+      if (hit) bits[i] = static_cast<std::uint16_t>(bits[i] | (1u << k));
+    }
+  }
+  return bits;
+}
+
+}  // namespace
+
+TYPED_TEST(CudaQueryTyped, SelfQueriesScanOnlyTheLevelsAboveThatHoldACellOfTheirRange) {
+  // Each device build records, per triangle, which of the 15 levels above its own hold a cell of
+  // its cell range there (one lookup per cell of the build and level: the ancestors of its
+  // cells), and a self query scans only those (and every level above own + 15), with no lookup
+  // on the others. The bits must equal the CPU hash's, found by looking up every cell of each
+  // range, on a soup of many sizes, a cloth draped over a sphere, and a soup with two
+  // stadium-sized triangles (levels far above the rest, beyond the 15 recorded; 128-bit keys):
+  // after a first build, after a re-hash on the device (no read-back, as a graph), and built with
+  // 128-bit keys (KDET_FCL_CUDA_FULL_KEYS). With KDET_FCL_CUDA_UPPER_LEVELS=0 nothing is recorded
+  // and every level is scanned; the candidates and the pairs must not change (the CPU's pairs),
+  // with the cells' pairs on and off, and with the warp and the tile scans. The scenes must have
+  // triangles whose range is empty on some occupied level above (else nothing is skipped).
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  TriangleMesh<S> cloth = makeDrapedCloth<S>(60, 3, 1, S(0.02), 1);
+  const TriangleMesh<S> sphere = makeSphere<S>({0, 0, 0}, 1, 24, 12);
+  for (const Triangle& t : sphere.triangles)
+    cloth.addTriangle(sphere.vertices[t[0]], sphere.vertices[t[1]], sphere.vertices[t[2]]);
+  TriangleMesh<S> stadium = makeRandomSoup<S>(3000, 2, S(1e-4), S(0.05), 11);
+  stadium.addTriangle({-1e6, -1e6, S(0.3)}, {1e6, -1e6, S(0.3)}, {0, 1e6, S(0.3)});
+  stadium.addTriangle({-1e6, S(0.2), -1e6}, {1e6, S(0.2), -1e6}, {0, S(0.2), 1e6});
+  struct Scene {
+    const char* what;
+    HashedMesh<S> mesh;
+    bool compact;  // its cell keys fit in 64 bits (a re-hash then reads nothing back)
+  };
+  Scene scenes[] = {{"soup", HashedMesh<S>(makeRandomSoup<S>(4001, 1, S(1e-3), S(0.2), 9)), true},
+                    {"cloth and sphere", HashedMesh<S>(std::move(cloth)), true},
+                    {"stadium", HashedMesh<S>(std::move(stadium)), false}};
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
+  cuda::setProfiling(true);
+  for (Scene& sc : scenes) {
+    const std::vector<TrianglePair> cpu = sorted(intersectSelf(sc.mesh).pairs);
+    const std::vector<std::uint16_t> expected = expectedUpperLevels(sc.mesh);
+    // Some triangle skips an occupied level (its bit clear under an occupied level above).
+    const auto& h = sc.mesh.hash();
+    std::size_t skips = 0;
+    for (std::size_t i = 0; i < expected.size(); ++i)
+      for (int k = 1; k <= 15 && h.level[i] + k <= h.top_level; ++k)
+        if (h.levelOccupied(h.level[i] + k) && !((expected[i] >> k) & 1u)) ++skips;
+    EXPECT_GT(skips, 0u) << sc.what;
+    for (const char* full : {"0", "1"}) {
+      kdet_test::ScopedEnv keys("KDET_FCL_CUDA_FULL_KEYS", full),
+          sync("KDET_FCL_CUDA_SYNC_REHASH", full);
+      for (int rehash = 0; rehash < 2; ++rehash) {
+        cuda::markDeformed(sc.mesh);  // a build with read-backs first (new keys), then a re-hash
+        const std::string what = std::string(sc.what) + ", full keys " + full + ", build " +
+                                 std::to_string(rehash);
+        EXPECT_EQ(intersectSelf(sc.mesh, on(Backend::Cuda)).pairs, cpu) << what;
+        const cuda::QueryProfile built = cuda::lastQueryProfile();
+        EXPECT_EQ(built.rehashes_async, rehash == 1 && *full == '0' && sc.compact ? 1 : 0)
+            << what;
+        const std::vector<std::uint16_t> bits = cuda::upperLevels(sc.mesh);
+        ASSERT_EQ(bits.size(), expected.size()) << what;
+        std::size_t wrong = 0;
+        for (std::size_t i = 0; i < bits.size(); ++i) wrong += bits[i] != expected[i];
+        EXPECT_EQ(wrong, 0u) << what;
+        for (const char* scan : {"warp", "tile"})
+          for (const char* cells : {"0", "1"}) {
+            kdet_test::ScopedEnv scan_env("KDET_FCL_CUDA_SCAN", scan),
+                cells_env("KDET_FCL_CUDA_SELF_CELLS", cells);
+            const std::string w = what + ", scan " + scan + ", self cells " + cells;
+            EXPECT_EQ(intersectSelf(sc.mesh, on(Backend::Cuda)).pairs, cpu) << w;
+            const std::size_t with = cuda::lastQueryProfile().candidates;
+            kdet_test::ScopedEnv off("KDET_FCL_CUDA_UPPER_LEVELS", "0");
+            cuda::markDeformed(sc.mesh);
+            EXPECT_EQ(intersectSelf(sc.mesh, on(Backend::Cuda)).pairs, cpu) << w << ", off";
+            EXPECT_EQ(cuda::lastQueryProfile().candidates, with) << w;
+            EXPECT_TRUE(cuda::upperLevels(sc.mesh).empty()) << w << ": recorded while off";
+            cuda::markDeformed(sc.mesh);  // the next one records them again
+          }
       }
     }
   }
