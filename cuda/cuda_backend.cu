@@ -1347,17 +1347,27 @@ std::uint32_t rehashCap(std::uint32_t cap) {
   return k > 0 && k < cap ? static_cast<std::uint32_t>(k) : cap;
 }
 
-/// Whether the environment variable `name` is set and starts with '0' (a knob turned off; read at
-/// every call): KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off,
-/// KDET_FCL_CUDA_UPPER_LEVELS=0 the levels above each triangle (upperLevelsOn).
+/// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
 bool envFlag0(const char* name) {
   const char* e = std::getenv(name);
   return e && *e == '0';
 }
 
-/// Whether a build records, per triangle, the levels above its own that hold a cell of its range
-/// (upperLevelsKernel; on unless KDET_FCL_CUDA_UPPER_LEVELS=0).
-bool upperLevelsOn() { return !envFlag0("KDET_FCL_CUDA_UPPER_LEVELS"); }
+/// Whether a build of `m` records, per triangle, the levels above its own that hold a cell of its
+/// range (upperLevelsKernel): KDET_FCL_CUDA_UPPER_LEVELS = 0 (never), 1 (always), unset (while
+/// the mesh's last self query found at most 4 candidates per triangle, as spansFor; a mesh not
+/// queried yet records them). Measured on an H100 (benchmarks/RESULTS-gpu.md): phase 1 of the
+/// self queries fell 7-17 % on every UNC and cloth scene, for 0.02-0.04 ms more build, so the
+/// sparse scenes gained (the cloths 20k-1M, funnel, n-body: most lookups of the levels above
+/// miss), while the crowded ones (cloth ball 8.4 candidates per triangle, the joint two frames
+/// 21: a third to half of those lookups hit) lost as much in the build as they saved. The choice
+/// changes the work, never the pairs.
+bool upperLevelsFor(double self_density) {
+  const char* e = std::getenv("KDET_FCL_CUDA_UPPER_LEVELS");
+  if (e && *e == '0') return false;
+  if (e && *e == '1') return true;
+  return self_density <= 4.0;
+}
 
 /// The device part of rebuild() after the uploads: everything a re-hash without read-back
 /// enqueues (and, for a build with read-backs, the read-backs too). Allocates only where a
@@ -1571,8 +1581,8 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
                                                   m.block_cell.data());
   checkLaunch();
   // The levels above each triangle's own that hold a cell of its range (self queries skip the
-  // others without a lookup). KDET_FCL_CUDA_UPPER_LEVELS=0 leaves them out (every level scanned).
-  m.upper_ready = upperLevelsOn();
+  // others without a lookup), where they pay (upperLevelsFor).
+  m.upper_ready = upperLevelsFor(m.self_density);
   if (m.upper_ready) {
     m.upper.reserve((nt + 1) / 2, false);
     CUDA_TRY(cudaMemsetAsync(m.upper.data(), 0, ((nt + 1) / 2) * sizeof(std::uint32_t), s));
@@ -1600,7 +1610,7 @@ void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   m.box.reserve(nt, false);
   m.diam.reserve(nt, false);
   m.level.reserve(nt, false);
-  if (upperLevelsOn()) m.upper.reserve((nt + 1) / 2, false);
+  if (upperLevelsFor(m.self_density)) m.upper.reserve((nt + 1) / 2, false);
   const std::size_t n4 = (nt + 1 + 63) & ~std::size_t(63);
   ctx.pairs_sorted.reserve(2 * n4);
   ctx.pairs.reserve(3 * n4 / 2);
@@ -1639,7 +1649,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   const std::vector<std::uintptr_t> key = {
       nt, cap, cell_cap, m.slot_count, std::uintptr_t(m.sort_bits), std::uintptr_t(g_num_sms),
       std::uintptr_t(m.size_ordered),
-      std::uintptr_t(ctx.red_ready), std::uintptr_t(upperLevelsOn()),
+      std::uintptr_t(ctx.red_ready), std::uintptr_t(upperLevelsFor(m.self_density)),
       reinterpret_cast<std::uintptr_t>(m.upper.data()),
       reinterpret_cast<std::uintptr_t>(m.v.data()), reinterpret_cast<std::uintptr_t>(m.t.data()),
       reinterpret_cast<std::uintptr_t>(m.box.data()),

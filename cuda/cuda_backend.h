@@ -46,9 +46,10 @@
 // take the pairs within a level from the cells and scan only the coarser levels (default: the
 // cells for meshes of about 200k cell entries and more), and KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
 // entries per warp task of those cells' pairs (default 8 or 32 by the density; all read at every
-// query, for tests and comparisons). KDET_FCL_CUDA_UPPER_LEVELS=0 (read at every build) stops
-// the builds from recording, per triangle, the levels above its own that hold a cell of its
-// range, so self queries look up every level (upperLevels()). Uploads of deformed
+// query, for tests and comparisons). KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes
+// the builds never or always record, per triangle, the levels above its own that hold a cell of
+// its range, which self queries then skip without a lookup (upperLevels(); by default recorded
+// while the mesh's last self query found at most 4 candidates per triangle). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
 // force the thread count and the chunk size (read at every upload). The pairs come back through
@@ -158,9 +159,10 @@ void markDeformed(const HashedMesh<S>& mesh);
 /// Per triangle of `mesh`, the bits its last device build recorded for self queries: bit 0 set
 /// (recorded), and bit k (1..15) set when level own + k holds a cell of the triangle's cell range
 /// (levels above own + 15 are not recorded and always scanned). A self query scans only the
-/// levels so marked, with no lookup on the others; KDET_FCL_CUDA_UPPER_LEVELS=0 (read at every
-/// build) records nothing and scans every level. Empty when the mesh is not cached on the device
-/// on its own, or its build recorded nothing. For tests.
+/// levels so marked, with no lookup on the others. Builds record them while the mesh's last self
+/// query found at most 4 candidates per triangle (KDET_FCL_CUDA_UPPER_LEVELS=0|1: never, always;
+/// read at every build). Empty when the mesh is not cached on the device on its own, or its last
+/// build recorded nothing. For tests.
 template <class S>
 std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh);
 /// Bytes of device memory the backend holds now (cached meshes + scratch buffers).

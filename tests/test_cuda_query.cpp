@@ -721,10 +721,13 @@ TYPED_TEST(CudaQueryTyped, SelfQueriesScanOnlyTheLevelsAboveThatHoldACellOfTheir
   // range, on a soup of many sizes, a cloth draped over a sphere, and a soup with two
   // stadium-sized triangles (levels far above the rest, beyond the 15 recorded; 128-bit keys):
   // after a first build, after a re-hash on the device (no read-back, as a graph), and built with
-  // 128-bit keys (KDET_FCL_CUDA_FULL_KEYS). With KDET_FCL_CUDA_UPPER_LEVELS=0 nothing is recorded
-  // and every level is scanned; the candidates and the pairs must not change (the CPU's pairs),
-  // with the cells' pairs on and off, and with the warp and the tile scans. The scenes must have
-  // triangles whose range is empty on some occupied level above (else nothing is skipped).
+  // 128-bit keys (KDET_FCL_CUDA_FULL_KEYS), all with KDET_FCL_CUDA_UPPER_LEVELS=1 (recorded on
+  // every build). With KDET_FCL_CUDA_UPPER_LEVELS=0 nothing is recorded and every level is
+  // scanned; the candidates and the pairs must not change (the CPU's pairs), with the cells'
+  // pairs on and off, and with the warp and the tile scans. The scenes must have triangles whose
+  // range is empty on some occupied level above (else nothing is skipped). By default a build
+  // records them while the mesh's last self query found at most 4 candidates per triangle: a
+  // sphere (about 1) keeps them, a crowded soup (over 100) drops them on its next build.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -745,6 +748,26 @@ TYPED_TEST(CudaQueryTyped, SelfQueriesScanOnlyTheLevelsAboveThatHoldACellOfTheir
                     {"stadium", HashedMesh<S>(std::move(stadium)), false}};
   kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
   cuda::setProfiling(true);
+  {
+    // The default rule.
+    HashedMesh<S> sparse(makeSphere<S>({0, 0, 0}, 1, 48, 24));
+    HashedMesh<S> crowded(makeRandomSoup<S>(4000, S(0.3), S(0.05), S(0.3), 7));
+    for (HashedMesh<S>* m : {&sparse, &crowded}) {
+      const bool is_sparse = m == &sparse;
+      const std::string what = is_sparse ? "sphere" : "crowded soup";
+      EXPECT_EQ(intersectSelf(*m, on(Backend::Cuda)).pairs, sorted(intersectSelf(*m).pairs))
+          << what;
+      const double density =
+          double(cuda::lastQueryProfile().candidates) / double(m->numTriangles());
+      EXPECT_EQ(density <= 4, is_sparse) << what << ": " << density << " candidates per triangle";
+      EXPECT_FALSE(cuda::upperLevels(*m).empty()) << what << ": a first build records them";
+      cuda::markDeformed(*m);
+      EXPECT_EQ(intersectSelf(*m, on(Backend::Cuda)).pairs, sorted(intersectSelf(*m).pairs))
+          << what;
+      EXPECT_EQ(cuda::upperLevels(*m).empty(), !is_sparse) << what << ": after a query";
+    }
+  }
+  kdet_test::ScopedEnv always("KDET_FCL_CUDA_UPPER_LEVELS", "1");
   for (Scene& sc : scenes) {
     const std::vector<TrianglePair> cpu = sorted(intersectSelf(sc.mesh).pairs);
     const std::vector<std::uint16_t> expected = expectedUpperLevels(sc.mesh);
