@@ -426,9 +426,9 @@ __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restr
 /// hold a cell of its range. Nothing is written unless the whole build was stored (not after
 /// need_sync, nor when the entries or cells exceed `entry_cap` or `cell_cap`): a triangle with
 /// some cells missing must keep its valid bit clear (such a build's query is rerun anyway).
-/// G = kUpperTile (ncu, H100: 8 lanes took 18-21 us on the UNC cloth ball and 23-42 us on the
-/// 1M cloth's frames; one lane per cell 34-39 and 30-44 us, 4 lanes 25 and 25-40, 32 lanes 13-14
-/// and 41-91: crowded cells want more lanes, light ones fewer).
+/// G = kUpperTile (ncu, H100: 8 lanes took 18-22 us on the UNC cloth ball and 23-43 us on the
+/// 1M cloth's frames; one lane per cell 33-40 and 30-44 us, 4 lanes 24-26 and 25-41, 32 lanes
+/// 13-15 and 41-91: crowded cells want more lanes, light ones fewer).
 constexpr int kUpperTile = 8;
 template <class S, int G>
 __global__ void upperLevelsKernel(HashView<S> M, const BuildInfo* __restrict__ info_p,
@@ -1357,10 +1357,11 @@ bool envFlag0(const char* name) {
 /// range (upperLevelsKernel): KDET_FCL_CUDA_UPPER_LEVELS = 0 (never), 1 (always), unset (while
 /// the mesh's last self query found at most 4 candidates per triangle, as spansFor; a mesh not
 /// queried yet records them). Measured on an H100 (benchmarks/RESULTS-gpu.md): phase 1 of the
-/// self queries fell 7-17 % on every UNC and cloth scene, for 0.02-0.04 ms more build, so the
-/// sparse scenes gained (the cloths 20k-1M, funnel, n-body: most lookups of the levels above
-/// miss), while the crowded ones (cloth ball 8.4 candidates per triangle, the joint two frames
-/// 21: a third to half of those lookups hit) lost as much in the build as they saved. The choice
+/// self queries fell 3-16 % on the UNC and cloth scenes, for 0.01-0.06 ms more build; per frame
+/// the sparse scenes (cloths, funnel, n-body: most lookups of the levels above miss) gained up to
+/// 0.1 ms or stayed level, the cloth ball (8.4 candidates per triangle; half of those lookups on
+/// levels with a cell in range) stayed level, and the joint two cloth-ball frames (21) lost
+/// 0.01-0.08 ms in every call. The choice
 /// changes the work, never the pairs.
 bool upperLevelsFor(double self_density) {
   const char* e = std::getenv("KDET_FCL_CUDA_UPPER_LEVELS");
