@@ -1361,8 +1361,7 @@ bool envFlag0(const char* name) {
 /// the sparse scenes (cloths, funnel, n-body: most lookups of the levels above miss) gained up to
 /// 0.1 ms or stayed level, the cloth ball (8.4 candidates per triangle; half of those lookups on
 /// levels with a cell in range) stayed level, and the joint two cloth-ball frames (21) lost
-/// 0.01-0.08 ms in every call. The choice
-/// changes the work, never the pairs.
+/// 0.01-0.08 ms in every call. The choice changes the work, never the pairs.
 bool upperLevelsFor(double self_density) {
   const char* e = std::getenv("KDET_FCL_CUDA_UPPER_LEVELS");
   if (e && *e == '0') return false;
@@ -1600,8 +1599,6 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   if (async) ++ctx.profile.rehashes_async;
   else ++ctx.profile.builds_with_readback;
 }
-
-
 
 /// Grows, before a graph capture, every buffer that buildOnDevice(async) could grow (the same
 /// sizes it asks for), so that nothing allocates while the stream is captured.

@@ -165,6 +165,7 @@ void markDeformed(const HashedMesh<S>& mesh);
 /// build recorded nothing. For tests.
 template <class S>
 std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh);
+
 /// Bytes of device memory the backend holds now (cached meshes + scratch buffers).
 std::size_t deviceBytesInUse();
 

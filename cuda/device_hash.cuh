@@ -152,7 +152,6 @@ __host__ __device__ __forceinline__ unsigned long long levelsFrom(unsigned long 
   return from > 63 ? 0ull : level_mask & (~0ull << from);
 }
 
-
 #if defined(__CUDACC__)
 
 /// The levels that triangle i of level `own` must scan in a self query of its own hierarchy:
