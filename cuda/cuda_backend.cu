@@ -1337,6 +1337,23 @@ bool envFlag(const char* name) {
   return e && *e == '1';
 }
 
+/// A knob that forces a choice: the environment variable `name` = 0 (off) or 1 (on), else
+/// `otherwise` (the choice's own rule). Read at every call.
+bool knobOr(const char* name, bool otherwise) {
+  const char* e = std::getenv(name);
+  if (e != nullptr && *e == '0') return false;
+  if (e != nullptr && *e == '1') return true;
+  return otherwise;
+}
+
+/// Candidates per query triangle of a mesh's last query above which its cells count as crowded
+/// (the UNC cloth ball 8.4, the two frames 21; smooth cloths 1.6-3.4, the n-body 1.1): the rule
+/// of spansFor, warpLanesLog2, cellRows and upperLevelsFor.
+constexpr double kCrowdedDensity = 4.0;
+
+/// The 32-bit words of HashView::upper for nt triangles (two per word).
+inline std::size_t upperWords(std::size_t nt) { return (nt + 1) / 2; }
+
 inline std::size_t roundUp(std::size_t x, std::size_t a) { return (x + a - 1) / a * a; }
 
 /// KDET_FCL_CUDA_REHASH_CAP=k (tests): a re-hash without read-back uses at most k entries and k
@@ -1363,10 +1380,7 @@ bool envFlag0(const char* name) {
 /// levels with a cell in range) stayed level, and the joint two cloth-ball frames (21) lost
 /// 0.01-0.08 ms in every call. The choice changes the work, never the pairs.
 bool upperLevelsFor(double self_density) {
-  const char* e = std::getenv("KDET_FCL_CUDA_UPPER_LEVELS");
-  if (e && *e == '0') return false;
-  if (e && *e == '1') return true;
-  return self_density <= 4.0;
+  return knobOr("KDET_FCL_CUDA_UPPER_LEVELS", self_density <= kCrowdedDensity);
 }
 
 /// The device part of rebuild() after the uploads: everything a re-hash without read-back
@@ -1584,8 +1598,8 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   // others without a lookup), where they pay (upperLevelsFor).
   m.upper_ready = upperLevelsFor(m.self_density);
   if (m.upper_ready) {
-    m.upper.reserve((nt + 1) / 2, false);
-    CUDA_TRY(cudaMemsetAsync(m.upper.data(), 0, ((nt + 1) / 2) * sizeof(std::uint32_t), s));
+    m.upper.reserve(upperWords(nt), false);
+    CUDA_TRY(cudaMemsetAsync(m.upper.data(), 0, upperWords(nt) * sizeof(std::uint32_t), s));
     const std::uint32_t ccap = async ? cell_cap : m.cell_cap;
     upperLevelsKernel<S, kUpperTile><<<blocksFor(std::max<std::uint32_t>(ccap, 1),
                                                  kBuildBlock / kUpperTile),
@@ -1608,7 +1622,7 @@ void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   m.box.reserve(nt, false);
   m.diam.reserve(nt, false);
   m.level.reserve(nt, false);
-  if (upperLevelsFor(m.self_density)) m.upper.reserve((nt + 1) / 2, false);
+  if (upperLevelsFor(m.self_density)) m.upper.reserve(upperWords(nt), false);
   const std::size_t n4 = (nt + 1 + 63) & ~std::size_t(63);
   ctx.pairs_sorted.reserve(2 * n4);
   ctx.pairs.reserve(3 * n4 / 2);
@@ -2120,10 +2134,7 @@ int tileSize() {
 /// 1.1, smooth cloth 1.6-3.4: +10 to +25 %), where the density rule leaves it off
 /// (benchmarks/RESULTS-gpu.md). The choice changes the work, never the pairs.
 bool spansFor(double density) {
-  const char* e = std::getenv("KDET_FCL_CUDA_SPANS");
-  if (e && *e == '0') return false;
-  if (e && *e == '1') return true;
-  return density > 4.0;
+  return knobOr("KDET_FCL_CUDA_SPANS", density > kCrowdedDensity);
 }
 
 /// Whether phase 1 runs the warp-wide scan (scanCandidatesWarp: 1-8 lanes per query triangle, the
@@ -2154,7 +2165,7 @@ unsigned int warpLanesLog2(unsigned long long queries, double density) {
     for (unsigned int l = 0; l <= 5; ++l)
       if (v == (1 << l)) return l;
   }
-  if (density > 4.0) return 3;
+  if (density > kCrowdedDensity) return 3;
   const unsigned long long fill = 4ull * 32ull * 32ull * static_cast<unsigned long long>(g_num_sms);
   unsigned int l = 0;
   while (l < 3 && (queries << l) < fill) ++l;
@@ -2225,10 +2236,8 @@ WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long t
 /// saves. KDET_FCL_CUDA_SELF_CELLS = 1 or 0 forces it on or off (read at every query, so tests and
 /// benchmarks can compare the two). Both give the same candidates.
 bool selfCellPairs(std::size_t entries) {
-  const char* e = std::getenv("KDET_FCL_CUDA_SELF_CELLS");
-  if (e != nullptr && *e == '0') return false;
-  if (e != nullptr && *e == '1') return true;
-  return entries >= 48 * 32 * static_cast<std::size_t>(g_num_sms);
+  return knobOr("KDET_FCL_CUDA_SELF_CELLS",
+                entries >= 48 * 32 * static_cast<std::size_t>(g_num_sms));
 }
 
 /// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least as many as the
@@ -2246,7 +2255,7 @@ std::uint32_t cellRows(std::size_t entries, double density) {
   for (long r = 1; r <= 32; r *= 2)
     if (v == r) return static_cast<std::uint32_t>(v);
   const std::size_t fill = 64 * static_cast<std::size_t>(g_num_sms);
-  return density <= 4.0 && entries / 32 >= fill ? 32u : 8u;
+  return density <= kCrowdedDensity && entries / 32 >= fill ? 32u : 8u;
 }
 
 /// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
@@ -2657,7 +2666,7 @@ std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh) {
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
     if (m.owner != &mesh || m.owner2 != nullptr || !m.valid || m.pending || !m.upper_ready)
       continue;
-    std::vector<std::uint32_t> words((m.nt + 1) / 2);
+    std::vector<std::uint32_t> words(upperWords(m.nt));
     CUDA_TRY(cudaMemcpyAsync(words.data(), m.upper.data(), words.size() * sizeof(std::uint32_t),
                              cudaMemcpyDeviceToHost, ctx.stream));
     CUDA_TRY(cudaStreamSynchronize(ctx.stream));
