@@ -1329,14 +1329,6 @@ void cubCall(Context& ctx, F&& f) {
   CUDA_TRY(f(static_cast<void*>(ctx.cub_temp.data()), bytes));
 }
 
-/// KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads the sizes back (the round-3 behaviour, for
-/// comparisons); KDET_FCL_CUDA_FULL_KEYS=1: 128-bit cell keys even where the compact 64-bit key
-/// is exact (tests). Both read at every build.
-bool envFlag(const char* name) {
-  const char* e = std::getenv(name);
-  return e && *e == '1';
-}
-
 /// A knob that forces a choice: the environment variable `name` = 0 (off) or 1 (on), else
 /// `otherwise` (the choice's own rule). Read at every call.
 bool knobOr(const char* name, bool otherwise) {
@@ -1345,6 +1337,11 @@ bool knobOr(const char* name, bool otherwise) {
   if (e != nullptr && *e == '1') return true;
   return otherwise;
 }
+
+/// KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads the sizes back (the round-3 behaviour, for
+/// comparisons); KDET_FCL_CUDA_FULL_KEYS=1: 128-bit cell keys even where the compact 64-bit key
+/// is exact (tests). Both read at every build.
+bool envFlag(const char* name) { return knobOr(name, false); }
 
 /// Candidates per query triangle of a mesh's last query above which its cells count as crowded
 /// (the UNC cloth ball 8.4, the two frames 21; smooth cloths 1.6-3.4, the n-body 1.1): the rule
@@ -1365,10 +1362,7 @@ std::uint32_t rehashCap(std::uint32_t cap) {
 }
 
 /// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
-bool envFlag0(const char* name) {
-  const char* e = std::getenv(name);
-  return e && *e == '0';
-}
+bool envFlag0(const char* name) { return !knobOr(name, true); }
 
 /// Whether a build of `m` records, per triangle, the levels above its own that hold a cell of its
 /// range (upperLevelsKernel): KDET_FCL_CUDA_UPPER_LEVELS = 0 (never), 1 (always), unset (while
@@ -1867,10 +1861,7 @@ unsigned long long capacityKnob() {
 
 /// The plane filter between the phases (Predicate::Exact only): KDET_FCL_CUDA_PLANE_FILTER=0
 /// turns it off (default on; read at every query, so tests and benchmarks can compare both).
-bool planeFilterOn() {
-  const char* e = std::getenv("KDET_FCL_CUDA_PLANE_FILTER");
-  return !(e && *e == '0');
-}
+bool planeFilterOn() { return knobOr("KDET_FCL_CUDA_PLANE_FILTER", true); }
 
 /// The candidates one round of a query may hold per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES
 /// = k, read at every query; default 14; 0: no limit). A query whose phase 1 gives more (two
@@ -2185,10 +2176,7 @@ std::uint32_t warpVisit() {
 /// resident blocks (KDET_FCL_CUDA_WARP_TASKS unset or 1), or run one warp per task on a grid
 /// that covers them all (0). Read at every query, so tests and benchmarks can compare the two.
 /// Both give the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
-bool dynamicWarpTasks() {
-  const char* e = std::getenv("KDET_FCL_CUDA_WARP_TASKS");
-  return !(e != nullptr && *e == '0');
-}
+bool dynamicWarpTasks() { return knobOr("KDET_FCL_CUDA_WARP_TASKS", true); }
 
 /// The grid and task counter of a warp-wide candidate kernel with `tasks` warp tasks. With the
 /// counter (kWarpTaskLoop<S> and dynamicWarpTasks()): no more blocks of kQueryBlock threads than
