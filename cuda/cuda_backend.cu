@@ -58,6 +58,7 @@
 #include "kdet_fcl/detail/triangle_intersection.h"
 #include "kdet_fcl/errors.h"
 #include "kept_self_result.h"
+#include "kdet_fcl/detail/knobs.h"
 
 namespace cg = cooperative_groups;
 
@@ -1108,6 +1109,9 @@ MeshSource<S> sourceOf(const TriangleMesh<S>* first, const TriangleMesh<S>* seco
   return src;
 }
 
+/// The knob that turns the kept self results of the CUDA backend off (detail::KeptSelfResult).
+constexpr const char* kSelfCacheKnob = "KDET_FCL_CUDA_SELF_CACHE";
+
 /// One HashedMesh's device state (or that of two hashed as one).
 template <class S>
 struct CachedMesh {
@@ -1155,7 +1159,7 @@ struct CachedMesh {
   // self result (detail::KeptSelfResult's rule: a rigid mesh's self query runs on the device
   // twice, then never again; a mesh with new geometry at every self query never keeps one).
   std::uint64_t builds = 0;
-  detail::KeptSelfResult kept_self{"KDET_FCL_CUDA_SELF_CACHE"};
+  detail::KeptSelfResult kept_self{kSelfCacheKnob};
 
   CachedMesh() = default;
   CachedMesh(const CachedMesh&) = delete;
@@ -1330,18 +1334,17 @@ void cubCall(Context& ctx, F&& f) {
 }
 
 /// A knob that forces a choice: the environment variable `name` = 0 (off) or 1 (on), else
-/// `otherwise` (the choice's own rule). Read at every call.
-bool knobOr(const char* name, bool otherwise) {
-  const char* e = std::getenv(name);
-  if (e != nullptr && *e == '0') return false;
-  if (e != nullptr && *e == '1') return true;
-  return otherwise;
-}
+/// `otherwise` (the choice's own rule); any other value throws (kdet_fcl/detail/knobs.h). Read
+/// at every call.
+bool knobOr(const char* name, bool otherwise) { return detail::switchKnob(name, otherwise); }
 
 /// KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads the sizes back (the round-3 behaviour, for
-/// comparisons); KDET_FCL_CUDA_FULL_KEYS=1: 128-bit cell keys even where the compact 64-bit key
-/// is exact (tests). Both read at every build.
-bool envFlag(const char* name) { return knobOr(name, false); }
+/// comparisons). Read at every build.
+bool syncRehash() { return knobOr("KDET_FCL_CUDA_SYNC_REHASH", false); }
+
+/// KDET_FCL_CUDA_FULL_KEYS=1: 128-bit cell keys even where the compact 64-bit key is exact
+/// (tests). Read at every build.
+bool fullKeys() { return knobOr("KDET_FCL_CUDA_FULL_KEYS", false); }
 
 /// Candidates per query triangle of a mesh's last query above which its cells count as crowded
 /// (the UNC cloth ball 8.4, the two frames 21; smooth cloths 1.6-3.4, the n-body 1.1): the rule
@@ -1356,13 +1359,12 @@ inline std::size_t roundUp(std::size_t x, std::size_t a) { return (x + a - 1) / 
 /// KDET_FCL_CUDA_REHASH_CAP=k (tests): a re-hash without read-back uses at most k entries and k
 /// cells, so that it overflows and takes the fallback. 0 or unset: the arrays' capacities.
 std::uint32_t rehashCap(std::uint32_t cap) {
-  const char* e = std::getenv("KDET_FCL_CUDA_REHASH_CAP");
-  const unsigned long long k = (e && *e) ? std::strtoull(e, nullptr, 10) : 0;
+  const std::uint64_t k = detail::numberKnob("KDET_FCL_CUDA_REHASH_CAP", 0, 0xFFFFFFFFull, 0);
   return k > 0 && k < cap ? static_cast<std::uint32_t>(k) : cap;
 }
 
 /// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
-bool envFlag0(const char* name) { return !knobOr(name, true); }
+bool rehashGraphOn() { return knobOr("KDET_FCL_CUDA_REHASH_GRAPH", true); }
 
 /// Whether a build of `m` records, per triangle, the levels above its own that hold a cell of its
 /// range (upperLevelsKernel): KDET_FCL_CUDA_UPPER_LEVELS = 0 (never), 1 (always), unset (while
@@ -1451,7 +1453,7 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     if (total > 0xF0000000ull)
       throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(total) +
                               " cell entries");
-    compact = m.info.fits64 != 0 && !envFlag("KDET_FCL_CUDA_FULL_KEYS");
+    compact = m.info.fits64 != 0 && !fullKeys();
     m.entry_tri.reserve(total);  // 1/8 slack: room for the next re-hash without read-back
     m.entry_span.reserve(m.entry_tri.capacity(), false);
     m.block_cell.reserve(m.entry_tri.capacity() / 32 + 1, false);
@@ -1726,7 +1728,7 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upl
     throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(nt) +
                             " triangles (at most 150,000,000)");
   const bool async = try_async && !upload_tris && m.key_words == 1 && m.nt == nt &&
-                     m.nv == nv && m.entry_cap > 0 && !envFlag("KDET_FCL_CUDA_SYNC_REHASH");
+                     m.nv == nv && m.entry_cap > 0 && !syncRehash();
   const std::size_t vbytes = nv * sizeof(Vec3<S>), tbytes = upload_tris ? nt * sizeof(Triangle) : 0;
   m.staging.reserve(vbytes + tbytes);
   char* stage = static_cast<char*>(m.staging.data());
@@ -1772,7 +1774,7 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upl
     CUDA_TRY(cudaStreamSynchronize(s));  // the staging buffer and m.info are free again
     return;
   }
-  if (async && !envFlag0("KDET_FCL_CUDA_REHASH_GRAPH")) {
+  if (async && rehashGraphOn()) {
     rehashFromGraph(ctx, m, nt);
     return;
   }
@@ -1854,9 +1856,7 @@ void evict(Context& ctx) {
 /// Initial output capacity knob for tests: KDET_FCL_CUDA_PAIR_CAPACITY=k caps the first pass at k
 /// pairs (forcing the overflow path). 0 or unset: no cap.
 unsigned long long capacityKnob() {
-  const char* e = std::getenv("KDET_FCL_CUDA_PAIR_CAPACITY");
-  if (e == nullptr || *e == 0) return 0;
-  return std::strtoull(e, nullptr, 10);
+  return detail::numberKnob("KDET_FCL_CUDA_PAIR_CAPACITY", 0, std::uint64_t(1) << 40, 0);
 }
 
 /// The plane filter between the phases (Predicate::Exact only): KDET_FCL_CUDA_PLANE_FILTER=0
@@ -1864,7 +1864,7 @@ unsigned long long capacityKnob() {
 bool planeFilterOn() { return knobOr("KDET_FCL_CUDA_PLANE_FILTER", true); }
 
 /// The candidates one round of a query may hold per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES
-/// = k, read at every query; default 14; 0: no limit). A query whose phase 1 gives more (two
+/// = k from 0 to 2^20, read at every query; default 14; 0: no limit). A query whose phase 1 gives more (two
 /// near-coincident cloth frames hashed as one give 21 per triangle) runs its tasks in rounds
 /// that reuse the candidate buffer, so that the buffer holds about k per triangle (8 bytes
 /// each), not all of them (runQuery). Each extra round costs time (on an H100, 0.3 ms on those
@@ -1872,9 +1872,10 @@ bool planeFilterOn() { return knobOr("KDET_FCL_CUDA_PLANE_FILTER", true); }
 /// rounds. Without the knob the limit is at least 2^16 candidates; with it, exactly k per
 /// triangle (tests force many rounds on small meshes).
 std::size_t roundCandidateLimit(std::size_t work) {
-  const char* e = std::getenv("KDET_FCL_CUDA_ROUND_CANDIDATES");
-  if (e == nullptr || *e == 0) return std::max<std::size_t>(std::size_t(1) << 16, 14 * work);
-  return static_cast<std::size_t>(std::strtoull(e, nullptr, 10)) * work;
+  const char* name = "KDET_FCL_CUDA_ROUND_CANDIDATES";
+  if (detail::knobText(name) == nullptr)
+    return std::max<std::size_t>(std::size_t(1) << 16, 14 * work);
+  return static_cast<std::size_t>(detail::numberKnob(name, 0, 1u << 20, 0)) * work;
 }
 
 /// Rounds for `candidates` candidates under the limit: one while they fit in it, else each round
@@ -2104,15 +2105,10 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
 }
 
 /// Lanes per query triangle in the candidate search: KDET_FCL_CUDA_TILE = 1, 4, 8, 16 or 32
-/// (default 8; read once). Larger tiles suit heavily loaded cells (crumpled cloth), smaller ones
+/// (default 8; read at every query). Larger tiles suit heavily loaded cells (crumpled cloth), smaller ones
 /// lightly loaded cells, where the repeated lookups dominate (benchmarks/RESULTS-gpu.md).
 int tileSize() {
-  static const int t = [] {
-    const char* e = std::getenv("KDET_FCL_CUDA_TILE");
-    const int v = (e && *e) ? std::atoi(e) : 8;
-    return (v == 1 || v == 4 || v == 8 || v == 16 || v == 32) ? v : 8;
-  }();
-  return t;
+  return static_cast<int>(detail::choiceKnob("KDET_FCL_CUDA_TILE", {1, 4, 8, 16, 32}, 8));
 }
 
 /// Whether the candidate search tests sub-cell spans (scanCandidatesGroup's kSpans), given the
@@ -2133,11 +2129,7 @@ bool spansFor(double density) {
 /// (scanCandidatesGroup: a tile of tileSize() lanes per query triangle):
 /// KDET_FCL_CUDA_SCAN = warp or tile (default warp; read at every query, so tests and benchmarks
 /// can compare the two). Both find the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
-bool warpScan() {
-  const char* e = std::getenv("KDET_FCL_CUDA_SCAN");
-  if (e != nullptr && std::strcmp(e, "tile") == 0) return false;
-  return true;
-}
+bool warpScan() { return detail::wordKnob("KDET_FCL_CUDA_SCAN", {"warp", "tile"}, 0) == 0; }
 
 /// Lanes per query triangle of the warp-wide scan, as log2, from the number of queries and the
 /// candidates per query triangle of the last query of the same kind on the same meshes (as
@@ -2150,12 +2142,10 @@ bool warpScan() {
 /// (the rule gives it 8, 5 % slower than the tile scan there).
 /// KDET_FCL_CUDA_WARP_LANES = 1, 2, 4, 8, 16 or 32 forces it (read at every query).
 unsigned int warpLanesLog2(unsigned long long queries, double density) {
-  const char* e = std::getenv("KDET_FCL_CUDA_WARP_LANES");
-  if (e != nullptr && *e) {
-    const int v = std::atoi(e);
-    for (unsigned int l = 0; l <= 5; ++l)
-      if (v == (1 << l)) return l;
-  }
+  const std::uint64_t forced =
+      detail::choiceKnob("KDET_FCL_CUDA_WARP_LANES", {1, 2, 4, 8, 16, 32}, 0);
+  for (unsigned int l = 0; l <= 5; ++l)
+    if (forced == (1u << l)) return l;
   if (density > kCrowdedDensity) return 3;
   const unsigned long long fill = 4ull * 32ull * 32ull * static_cast<unsigned long long>(g_num_sms);
   unsigned int l = 0;
@@ -2167,9 +2157,8 @@ unsigned int warpLanesLog2(unsigned long long queries, double density) {
 /// into chunks): kMaxWarpVisit, or KDET_FCL_CUDA_WARP_VISIT (1 .. kMaxWarpVisit) so that tests
 /// can cut every cell.
 std::uint32_t warpVisit() {
-  const char* e = std::getenv("KDET_FCL_CUDA_WARP_VISIT");
-  const long v = (e != nullptr && *e) ? std::atol(e) : 0;
-  return (v >= 1 && v <= long(kMaxWarpVisit)) ? std::uint32_t(v) : kMaxWarpVisit;
+  return static_cast<std::uint32_t>(
+      detail::numberKnob("KDET_FCL_CUDA_WARP_VISIT", 1, kMaxWarpVisit, kMaxWarpVisit));
 }
 
 /// Whether the warp-wide candidate kernels take their tasks from a counter, on a grid of the
@@ -2238,10 +2227,9 @@ bool selfCellPairs(std::size_t entries) {
 /// KDET_FCL_CUDA_CELL_ROWS = 1, 2, 4, 8, 16 or 32 forces it (read at every query; a divisor of
 /// 32, so that a task's entries lie in the 32 cells from its block_cell).
 std::uint32_t cellRows(std::size_t entries, double density) {
-  const char* e = std::getenv("KDET_FCL_CUDA_CELL_ROWS");
-  const long v = (e != nullptr && *e) ? std::atol(e) : 0;
-  for (long r = 1; r <= 32; r *= 2)
-    if (v == r) return static_cast<std::uint32_t>(v);
+  const std::uint64_t forced =
+      detail::choiceKnob("KDET_FCL_CUDA_CELL_ROWS", {1, 2, 4, 8, 16, 32}, 0);
+  if (forced != 0) return static_cast<std::uint32_t>(forced);
   const std::size_t fill = 64 * static_cast<std::size_t>(g_num_sms);
   return density <= kCrowdedDensity && entries / 32 >= fill ? 32u : 8u;
 }
@@ -2252,14 +2240,9 @@ std::uint32_t cellRows(std::size_t entries, double density) {
 /// its loop state to local memory on every cell (ncu: 30M local requests on the cloth ball), so
 /// the 64-register kernel's phase 1 was measured 15-23% faster on every scene
 /// (benchmarks/RESULTS-gpu.md, "Register cap of the candidate search"); both beat the uncapped
-/// kernel ("Optimization round 2"). Read once.
+/// kernel ("Optimization round 2"). Read at every query.
 int minBlocksKnob() {
-  static const int mb = [] {
-    const char* e = std::getenv("KDET_FCL_CUDA_MINBLOCKS");
-    const int v = (e && *e) ? std::atoi(e) : 8;
-    return (v == 1 || v == 8 || v == 12) ? v : 8;
-  }();
-  return mb;
+  return static_cast<int>(detail::choiceKnob("KDET_FCL_CUDA_MINBLOCKS", {1, 8, 12}, 8));
 }
 
 /// Calls f(G, MB) (integral constants) for the configured tile and register cap.
@@ -2306,14 +2289,10 @@ bool usePlaneFilter(const QueryOptions& options) {
 }
 
 /// Register cap of the plane filter: KDET_FCL_CUDA_FILTER_MINBLOCKS = 6 (at most 40 registers,
-/// ~150 B of spills) or 1 (default: uncapped, ~76 registers). Read once. The uncapped kernel was
-/// measured faster (benchmarks/RESULTS-gpu.md, "Optimization round 3").
+/// ~150 B of spills) or 1 (default: uncapped, ~76 registers). Read at every query. The uncapped
+/// kernel was measured faster (benchmarks/RESULTS-gpu.md, "Optimization round 3").
 int filterMinBlocks() {
-  static const int mb = [] {
-    const char* e = std::getenv("KDET_FCL_CUDA_FILTER_MINBLOCKS");
-    return (e && *e == '6' && e[1] == 0) ? 6 : 1;
-  }();
-  return mb;
+  return static_cast<int>(detail::choiceKnob("KDET_FCL_CUDA_FILTER_MINBLOCKS", {1, 6}, 1));
 }
 
 /// Launches the plane filter (grid-stride over the device-side candidate count: 8 blocks of 256
@@ -2575,9 +2554,46 @@ AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<
   return r;
 }
 
+/// KDET_FCL_CUDA_JOINT=0 runs the three queries of intersectAll instead of one joint query
+/// (read at every call).
+bool jointOn() { return knobOr("KDET_FCL_CUDA_JOINT", true); }
+
+/// Reads every knob of the CUDA backend once, so that a value a knob does not accept throws
+/// InvalidInputError (naming the variable) before a query enqueues any work, not half-way
+/// through it. Each knob is read through the function that the query itself uses. With no
+/// KDET_FCL_CUDA_* variable set (a user's usual case) it returns after one pass over the
+/// environment; reading them all costs about 6 us on a 2-core Xeon.
+void readEveryKnob() {
+  if (!detail::someKnobSet("KDET_FCL_CUDA_")) return;
+  (void)syncRehash();
+  (void)fullKeys();
+  (void)rehashCap(1);
+  (void)rehashGraphOn();
+  (void)upperLevelsFor(0);
+  (void)capacityKnob();
+  (void)planeFilterOn();
+  (void)roundCandidateLimit(1);
+  (void)tileSize();
+  (void)spansFor(0);
+  (void)warpScan();
+  (void)warpLanesLog2(1, 0);
+  (void)warpVisit();
+  (void)dynamicWarpTasks();
+  (void)selfCellPairs(0);
+  (void)cellRows(0, 0);
+  (void)minBlocksKnob();
+  (void)filterMinBlocks();
+  (void)jointOn();
+  (void)detail::KeptSelfResult::on(kSelfCacheKnob);
+  (void)staging::uploadChunk();
+  (void)staging::downloadChunk();
+  (void)staging::uploadThreads(1);
+}
+
 /// Serialises, initialises, and on a CUDA error drops every device buffer before rethrowing.
 template <class F>
 auto guarded(F&& f) -> decltype(f(std::declval<Context&>())) {
+  readEveryKnob();
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
   try {
@@ -2620,12 +2636,14 @@ bool intersectJoint(const HashedMesh<S>& a, const HashedMesh<S>& b, const QueryO
   const bool joint = options.max_pairs == 0 && a.numTriangles() > 0 && b.numTriangles() > 0 &&
                      a.numTriangles() + b.numTriangles() <= kMaxDeviceTriangles &&
                      detail::relativePose(a.pose(), b.pose()).identity &&
-                     !envFlag0("KDET_FCL_CUDA_JOINT");
+                     jointOn();
   if (!joint) return false;
   *out = guarded([&](Context& ctx) { return jointImpl(ctx, a, b, options); });
   return true;
 }
 
+
+void checkKnobs() { readEveryKnob(); }
 
 void setProfiling(bool on) {
   Context& ctx = context();

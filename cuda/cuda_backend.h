@@ -26,14 +26,13 @@
 //
 // Knobs (environment, for tests and tuning): KDET_FCL_CUDA_PAIR_CAPACITY=k caps the first pass's
 // candidate and pair buffers at k (forces the overflow path); KDET_FCL_CUDA_TILE=1|4|8|16|32
-// sets the lanes per query triangle of the candidate search (default 8, read once) and
-// KDET_FCL_CUDA_MINBLOCKS=1|8|12 its register cap (none, 64 or 40 registers; default 8 (64), read
-// once);
+// sets the lanes per query triangle of the candidate search (default 8) and
+// KDET_FCL_CUDA_MINBLOCKS=1|8|12 its register cap (none, 64 or 40 registers; default 8 (64));
 // KDET_FCL_CUDA_PLANE_FILTER=0 turns off the plane filter between the candidate search and the
 // exact tests (default on, Predicate::Exact only; read at every query) and
-// KDET_FCL_CUDA_FILTER_MINBLOCKS=6 caps the filter kernel at 40 registers (default uncapped;
-// read once); KDET_FCL_CUDA_SYNC_REHASH=1 makes every re-hash read its sizes back (the round-3
-// flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell keys everywhere and
+// KDET_FCL_CUDA_FILTER_MINBLOCKS=6 caps the filter kernel at 40 registers (default uncapped);
+// these three are read at every query; KDET_FCL_CUDA_SYNC_REHASH=1 makes every re-hash read its
+// sizes back (the round-3 flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell keys everywhere and
 // KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces its fallback); these
 // three are read at every build, for tests. KDET_FCL_CUDA_SPANS=0|1 forces the sub-cell span
 // filter off or on (default: chosen per query, read at every query). KDET_FCL_CUDA_SCAN=tile
@@ -54,7 +53,10 @@
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
 // force the thread count and the chunk size (read at every upload). The pairs come back through
 // pinned memory in 256 KiB chunks, each appended to the result as it arrives;
-// KDET_FCL_CUDA_DOWNLOAD_CHUNK=b sets that chunk size (read at every query).
+// KDET_FCL_CUDA_DOWNLOAD_CHUNK=b sets that chunk size (read at every query). Every query first
+// reads every knob (checkKnobs()): a value a knob does not accept (not 0 or 1 for a switch, not
+// one of its numbers, out of its range, "abc") throws InvalidInputError naming the variable,
+// before any work; unset or empty means the default.
 //
 // Self queries of unchanged meshes: a self query's pairs depend on the geometry, not the pose.
 // A self query that finds the same device geometry as the mesh's previous self query keeps its
@@ -165,6 +167,12 @@ void markDeformed(const HashedMesh<S>& mesh);
 /// build recorded nothing. For tests.
 template <class S>
 std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh);
+
+/// Reads every environment knob of the CUDA backend (KDET_FCL_CUDA_*, README.md) and throws
+/// InvalidInputError, naming the variable, its value and what it accepts, for a value it does
+/// not accept (kdet_fcl/detail/knobs.h). Every query runs this first, so a bad knob fails the
+/// query before any work. Needs no device (tests call it directly).
+void checkKnobs();
 
 /// Bytes of device memory the backend holds now (cached meshes + scratch buffers).
 std::size_t deviceBytesInUse();

@@ -18,9 +18,10 @@
 // sizes of a pair list: their start and the zero-fill of a presized std::vector cost more than
 // they saved (benchmarks/RESULTS-gpu.md, "Read-back").
 //
-// Knobs (environment, read at every call, for tests and comparisons):
+// Knobs (environment, read at every call, for tests and comparisons; a value out of range or
+// not a number throws InvalidInputError, kdet_fcl/detail/knobs.h):
 // KDET_FCL_CUDA_UPLOAD_THREADS=n (1..64) forces the number of host threads (1: one thread,
-// still chunked); KDET_FCL_CUDA_UPLOAD_CHUNK=b (4096 bytes or more) sets the chunk size;
+// still chunked); KDET_FCL_CUDA_UPLOAD_CHUNK=b (4096 bytes to 4 GiB) sets the chunk size;
 // KDET_FCL_CUDA_DOWNLOAD_CHUNK=b the same for downloads.
 
 #include <cuda_runtime.h>
@@ -33,6 +34,8 @@
 #include <mutex>
 #include <thread>
 #include <vector>
+
+#include "kdet_fcl/detail/knobs.h"
 
 namespace kdet_fcl {
 namespace staging {
@@ -47,19 +50,11 @@ constexpr int kMaxUploadThreads = 8;
 /// chunks were slower and 1 MiB level; benchmarks/RESULTS-gpu.md, "Read-back").
 constexpr std::size_t kDownloadChunk = std::size_t(1) << 18;
 
-/// A positive integer from the environment variable `name` within [lo, hi], else 0.
-inline long long uploadKnob(const char* name, long long lo, long long hi) {
-  const char* e = std::getenv(name);
-  if (e == nullptr || *e == 0) return 0;
-  char* end = nullptr;
-  const long long v = std::strtoll(e, &end, 10);
-  return (end != nullptr && *end == 0 && v >= lo && v <= hi) ? v : 0;
-}
-
-/// Chunk size from the knob `name` (4096 bytes or more), else `fallback`.
+/// Chunk size from the knob `name` (4096 bytes to 4 GiB), else `fallback`; any other value
+/// throws InvalidInputError (kdet_fcl/detail/knobs.h).
 inline std::size_t chunkFrom(const char* name, std::size_t fallback) {
-  const long long v = uploadKnob(name, 4096, 1LL << 32);
-  return v > 0 ? std::size_t(v) : fallback;
+  return static_cast<std::size_t>(
+      detail::numberKnob(name, 4096, std::uint64_t(1) << 32, fallback));
 }
 
 /// Chunk size of a staged upload (KDET_FCL_CUDA_UPLOAD_CHUNK, else kUploadChunk).
@@ -70,10 +65,12 @@ inline std::size_t downloadChunk() {
   return chunkFrom("KDET_FCL_CUDA_DOWNLOAD_CHUNK", kDownloadChunk);
 }
 
-/// Host threads for `chunks` chunks: KDET_FCL_CUDA_UPLOAD_THREADS, else one per chunk up to
-/// kMaxUploadThreads and the hardware's thread count; never more than the chunks.
+/// Host threads for `chunks` chunks: KDET_FCL_CUDA_UPLOAD_THREADS (1..64; any other value
+/// throws), else one per chunk up to kMaxUploadThreads and the hardware's thread count; never
+/// more than the chunks.
 inline int uploadThreads(std::size_t chunks) {
-  long long t = uploadKnob("KDET_FCL_CUDA_UPLOAD_THREADS", 1, 64);
+  long long t =
+      static_cast<long long>(detail::numberKnob("KDET_FCL_CUDA_UPLOAD_THREADS", 1, 64, 0));
   if (t == 0) {
     const unsigned hw = std::thread::hardware_concurrency();
     t = std::min<long long>(kMaxUploadThreads, hw == 0 ? 1 : hw);

@@ -3,11 +3,11 @@
 // the CPU backend (one per HashedMesh) and the CUDA backend (one per cached device mesh).
 
 #include <cstdint>
-#include <cstdlib>
 #include <mutex>
 #include <vector>
 
 #include "kdet_fcl/query.h"
+#include "kdet_fcl/detail/knobs.h"
 
 namespace kdet_fcl {
 namespace detail {
@@ -26,8 +26,13 @@ class KeptSelfResult {
  public:
   /// `knob`: the environment variable whose value 0 turns keeping off (KDET_FCL_CPU_SELF_CACHE
   /// for the CPU backend, KDET_FCL_CUDA_SELF_CACHE for the CUDA one and the LBVH baseline). It is
-  /// read at every query, so a test or a benchmark can change it between queries.
+  /// read at every query, so a test or a benchmark can change it between queries; a value other
+  /// than 0 or 1 throws InvalidInputError from the query.
   explicit KeptSelfResult(const char* knob) : knob_(knob) {}
+
+  /// Whether the knob `knob` lets a mesh keep its self result: unset, empty or 1 yes, 0 no; any
+  /// other value throws InvalidInputError (kdet_fcl/detail/knobs.h).
+  static bool on(const char* knob) { return switchKnob(knob, true); }
 
   /// What find() decided for the query: whether offer() keeps its result, and for which geometry.
   struct Ticket {
@@ -40,8 +45,7 @@ class KeptSelfResult {
   /// to offer() with *ticket. With the knob at 0, nothing is answered or kept.
   bool find(std::uint64_t geometry, const QueryOptions& options, QueryResult* out,
             Ticket* ticket) {
-    const char* e = std::getenv(knob_);
-    const bool enabled = !(e && *e == '0');
+    const bool enabled = on(knob_);
     std::lock_guard<std::mutex> lock(mutex_);
     ticket->geometry = geometry;
     ticket->keep = enabled && seen_ == geometry;  // the same geometry as the previous self query

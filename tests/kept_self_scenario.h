@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "kdet_fcl/errors.h"
 #include "scoped_env.h"
 #include "test_util.h"
 
@@ -32,6 +33,20 @@ void runKeptSelfScenario(kdet_fcl::HashedMesh<double>& soup, kdet_fcl::Backend b
   ASSERT_GT(first.first.size(), 20u);
   EXPECT_FALSE(self("same geometry, computed and kept", 0, Predicate::Exact).second);
   EXPECT_TRUE(self("kept", 0, Predicate::Exact).second);
+  // A value the knob does not accept fails the query with InvalidInputError naming the variable,
+  // before any work; the kept result survives it.
+  for (const char* bad : {"yes", "2", "01", " 1", "off"}) {
+    ScopedEnv misspelt(knob, bad);
+    try {
+      self("misspelt knob", 0, Predicate::Exact);
+      ADD_FAILURE() << knob << "='" << bad << "' was accepted";
+    } catch (const kdet_fcl::InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(knob) + "='" + bad + "'"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_TRUE(self("kept after the misspelt knob", 0, Predicate::Exact).second);
   // The pose does not change a self query's pairs; an inter query does not change the geometry.
   soup.setPose(kdet_fcl::makeTransform<double>({0, 0, 1}, 0.7, {3.0, -1.0, 2.0}));
   const kdet_fcl::HashedMesh<double> other(kdet_fcl::makeSphere<double>({0, 0, 0}, 2.0, 24, 12));

@@ -2,7 +2,8 @@
 // give InvalidInputError, files whose headers claim huge counts give MeshFileError at once, an
 // allocation failure under an address-space limit becomes an exception (never an abort), and a
 // failed call changes neither the caller's data nor a HashedMesh's state. The readers' own
-// malformed-file cases live in test_mesh_io.cpp; the CLI's in cli_bad_input.cmake.
+// malformed-file cases live in test_mesh_io.cpp; the CLI's in cli_bad_input.cmake. An
+// environment knob (KDET_FCL_*) with a value it does not accept gives InvalidInputError too.
 
 #include <gtest/gtest.h>
 #include <malloc.h>
@@ -21,7 +22,9 @@
 #include <string>
 #include <vector>
 
+#include "kdet_fcl/detail/knobs.h"
 #include "oom_util.h"
+#include "scoped_env.h"
 #include "test_util.h"
 
 using namespace kdet_fcl;
@@ -375,4 +378,87 @@ TEST(OutOfMemory, AFailedRebuildKeepsThePreviousState) {
     EXPECT_EQ(signals, 0) << "a failed rebuild crashed";
     EXPECT_EQ(successes, 1);
   }
+}
+
+// The environment knobs (kdet_fcl/detail/knobs.h): unset or empty gives the default, each knob
+// accepts exactly its values, and anything else throws InvalidInputError naming the variable and
+// its value (never read as something else).
+TEST(Knobs, EachParserAcceptsItsValuesAndRejectsEveryOtherNamingTheVariable) {
+  using namespace kdet_fcl::detail;
+  const char* name = "KDET_FCL_TEST_KNOB";
+  auto rejects = [&](const char* value, auto&& read) {
+    kdet_test::ScopedEnv e(name, value);
+    try {
+      read();
+      ADD_FAILURE() << "'" << value << "' was accepted";
+    } catch (const InvalidInputError& err) {
+      const std::string what = err.what();
+      EXPECT_NE(what.find(std::string(name) + "='" + value + "'"), std::string::npos) << what;
+      EXPECT_NE(what.find("expected"), std::string::npos) << what;
+    }
+  };
+  auto with = [&](const char* value, auto&& read) {
+    kdet_test::ScopedEnv e(name, value);
+    return read();
+  };
+  // Switches.
+  auto sw = [&](bool otherwise) { return [=] { return switchKnob(name, otherwise); }; };
+  EXPECT_TRUE(with(nullptr, sw(true)));
+  EXPECT_FALSE(with(nullptr, sw(false)));
+  EXPECT_TRUE(with("", sw(true)));
+  EXPECT_FALSE(with("0", sw(true)));
+  EXPECT_TRUE(with("1", sw(false)));
+  for (const char* bad : {"2", "00", "01", "yes", "no", "on", "true", " 1", "1 ", "-0", "0x1"})
+    rejects(bad, sw(true));
+  // Whole numbers in a range.
+  auto num = [&] { return numberKnob(name, 3, 1000, 42); };
+  EXPECT_EQ(with(nullptr, num), 42u);
+  EXPECT_EQ(with("", num), 42u);
+  EXPECT_EQ(with("3", num), 3u);
+  EXPECT_EQ(with("1000", num), 1000u);
+  EXPECT_EQ(with("0077", num), 77u);  // leading zeros are still the same decimal number
+  for (const char* bad : {"2", "1001", "-5", "+5", "5x", "x5", "abc", "5.0", "1e2", " 5", "5 ",
+                          "18446744073709551616", "99999999999999999999999"})
+    rejects(bad, num);
+  auto wide = [&] { return numberKnob(name, 0, ~std::uint64_t(0), 1); };
+  EXPECT_EQ(with("18446744073709551615", wide), ~std::uint64_t(0));
+  EXPECT_EQ(with("0", wide), 0u);
+  rejects("18446744073709551616", wide);  // one past 2^64 - 1: no wrap-around
+  // One of a list of numbers.
+  auto choice = [&] { return choiceKnob(name, {1, 4, 8}, 8); };
+  EXPECT_EQ(with(nullptr, choice), 8u);
+  EXPECT_EQ(with("1", choice), 1u);
+  EXPECT_EQ(with("4", choice), 4u);
+  for (const char* bad : {"0", "2", "16", "four", "4k"}) rejects(bad, choice);
+  // One of a list of words.
+  auto word = [&] { return wordKnob(name, {"warp", "tile"}, 0); };
+  EXPECT_EQ(with(nullptr, word), 0);
+  EXPECT_EQ(with("warp", word), 0);
+  EXPECT_EQ(with("tile", word), 1);
+  for (const char* bad : {"Tile", "tiles", "1", "warp "}) rejects(bad, word);
+  // The quick pass that lets an unset environment skip the checks sees a set variable.
+  {
+    kdet_test::ScopedEnv e(name, nullptr);
+    EXPECT_FALSE(someKnobSet("KDET_FCL_TEST_KN"));
+  }
+  kdet_test::ScopedEnv e(name, "1");
+  EXPECT_TRUE(someKnobSet("KDET_FCL_TEST_KN"));
+  EXPECT_FALSE(someKnobSet("KDET_FCL_TEST_KNOBS"));
+}
+
+// The CPU backend's one knob (KDET_FCL_CPU_SELF_CACHE) with a value it does not accept fails a
+// self query with that error; the kept-result scenario (test_query.cpp) checks the same on a
+// kept result.
+TEST(Knobs, AMisspeltCpuKnobFailsTheSelfQueryAndTheMendedKnobRunsIt) {
+  const HashedMesh<double> soup(makeRandomSoup<double>(300, 3.0, 0.3, 1.0, 5));
+  const std::vector<TrianglePair> want = bruteForceIntersectSelf(soup.mesh());
+  ASSERT_FALSE(want.empty());
+  {
+    kdet_test::ScopedEnv bad("KDET_FCL_CPU_SELF_CACHE", "false");
+    EXPECT_THROW(intersectSelf(soup), InvalidInputError);
+    // An inter query does not read that knob.
+    EXPECT_NO_THROW(intersectMeshes(soup, soup));
+  }
+  kdet_test::ScopedEnv mended("KDET_FCL_CPU_SELF_CACHE", "0");
+  EXPECT_EQ(kdet_test::sorted(intersectSelf(soup).pairs), want);
 }

@@ -88,6 +88,91 @@ TEST(CudaQuery, CudaWithoutDeviceIsATypedError) {
   EXPECT_NO_THROW(intersectSelf(a, on(Backend::Auto)));
 }
 
+#if KDET_FCL_TEST_HAVE_CUDA
+// Every knob of the CUDA backend (cuda_backend.h, README.md) accepts its values and rejects any
+// other with InvalidInputError naming the variable and the value; every query runs the same
+// check first (cuda::checkKnobs). Needs no device.
+TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
+  struct Knob {
+    const char* name;
+    std::vector<const char*> good, bad;
+  };
+  const std::vector<const char*> on_off = {"0", "1"};
+  const std::vector<const char*> not_on_off = {"2", "yes", "off", "01", " 1"};
+  const std::vector<const char*> powers = {"1", "2", "4", "8", "16", "32"};
+  const Knob knobs[] = {
+      {"KDET_FCL_CUDA_SYNC_REHASH", on_off, not_on_off},
+      {"KDET_FCL_CUDA_FULL_KEYS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},
+      {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
+      {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_SELF_CELLS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_JOINT", on_off, not_on_off},
+      {"KDET_FCL_CUDA_SELF_CACHE", on_off, not_on_off},
+      {"KDET_FCL_CUDA_REHASH_CAP", {"0", "100", "4294967295"}, {"-1", "4294967296", "1k"}},
+      {"KDET_FCL_CUDA_PAIR_CAPACITY", {"0", "7", "1099511627776"}, {"1099511627777", "x", "7 "}},
+      {"KDET_FCL_CUDA_ROUND_CANDIDATES", {"0", "1", "14", "1048576"}, {"1048577", "abc", "-1"}},
+      {"KDET_FCL_CUDA_TILE", {"1", "4", "8", "16", "32"}, {"0", "2", "64", "eight"}},
+      {"KDET_FCL_CUDA_SCAN", {"warp", "tile"}, {"Tile", "1", "warp2"}},
+      {"KDET_FCL_CUDA_WARP_LANES", powers, {"0", "3", "64"}},
+      {"KDET_FCL_CUDA_WARP_VISIT", {"1", "33554432"}, {"0", "33554433", "many"}},
+      {"KDET_FCL_CUDA_CELL_ROWS", powers, {"0", "3", "64"}},
+      {"KDET_FCL_CUDA_MINBLOCKS", {"1", "8", "12"}, {"0", "4", "16"}},
+      {"KDET_FCL_CUDA_FILTER_MINBLOCKS", {"1", "6"}, {"0", "7"}},
+      {"KDET_FCL_CUDA_UPLOAD_CHUNK", {"4096", "4294967296"}, {"4095", "4294967297", "1M"}},
+      {"KDET_FCL_CUDA_DOWNLOAD_CHUNK", {"4096", "4294967296"}, {"4095", "4294967297", "1M"}},
+      {"KDET_FCL_CUDA_UPLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
+  };
+  for (const Knob& k : knobs) {
+    for (const char* unset : {static_cast<const char*>(nullptr), ""}) {
+      kdet_test::ScopedEnv e(k.name, unset);
+      EXPECT_NO_THROW(cuda::checkKnobs()) << k.name << " unset or empty";
+    }
+    for (const char* v : k.good) {
+      kdet_test::ScopedEnv e(k.name, v);
+      EXPECT_NO_THROW(cuda::checkKnobs()) << k.name << "='" << v << "'";
+    }
+    for (const char* v : k.bad) {
+      kdet_test::ScopedEnv e(k.name, v);
+      try {
+        cuda::checkKnobs();
+        ADD_FAILURE() << k.name << "='" << v << "' was accepted";
+      } catch (const InvalidInputError& err) {
+        EXPECT_NE(std::string(err.what()).find(std::string(k.name) + "='" + v + "'"),
+                  std::string::npos)
+            << err.what();
+      }
+    }
+  }
+}
+
+// A query under a bad knob fails before any work, on every entry point, and leaves the device
+// caches usable: the next query, with the knob mended, gives the CPU's pairs.
+TEST(CudaQuery, AQueryUnderABadKnobFailsFirstAndTheNextOneIsRight) {
+  KDET_SKIP_WITHOUT_DEVICE();
+  HashedMesh<double> soup(makeRandomSoup<double>(2000, 4.0, 0.2, 1.0, 31));
+  HashedMesh<double> sphere(makeSphere<double>({0.5, 0, 0}, 2.0, 32, 16));
+  const auto cpu_self = sorted(intersectSelf(soup, on(Backend::Cpu)).pairs);
+  const auto cpu_inter = sorted(intersectMeshes(soup, sphere, on(Backend::Cpu)).pairs);
+  ASSERT_FALSE(cpu_self.empty());
+  ASSERT_FALSE(cpu_inter.empty());
+  EXPECT_EQ(intersectSelf(soup, on(Backend::Cuda)).pairs, cpu_self);  // cached on the device
+  for (const char* knob : {"KDET_FCL_CUDA_ROUND_CANDIDATES", "KDET_FCL_CUDA_UPLOAD_THREADS"}) {
+    {
+      kdet_test::ScopedEnv bad(knob, "abc");
+      EXPECT_THROW(intersectSelf(soup, on(Backend::Cuda)), InvalidInputError) << knob;
+      EXPECT_THROW(intersectMeshes(soup, sphere, on(Backend::Cuda)), InvalidInputError) << knob;
+      EXPECT_THROW(intersectAll(soup, sphere, on(Backend::Cuda)), InvalidInputError) << knob;
+    }
+    cuda::markDeformed(soup);  // the next query re-hashes on the device
+    EXPECT_EQ(intersectSelf(soup, on(Backend::Cuda)).pairs, cpu_self) << knob;
+    EXPECT_EQ(intersectMeshes(soup, sphere, on(Backend::Cuda)).pairs, cpu_inter) << knob;
+  }
+}
+#endif
+
 TEST(CudaQuery, ResolvesToCudaWithADevice) {
   KDET_SKIP_WITHOUT_DEVICE();
   EXPECT_EQ(resolveBackend(Backend::Cuda, 10), Backend::Cuda);

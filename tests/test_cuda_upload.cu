@@ -1,8 +1,8 @@
 // The staged copies (cuda/staged_upload.h) that the CUDA backend and the GPU BVH baseline share.
 // Upload: every byte arrives, nothing beyond the range is written, whatever the number of host
 // threads and the chunk size. Download: every element arrives, in order, in whole-element chunks,
-// and a throwing consumer leaves cleanly. The knobs are parsed and bounded. The copy tests skip
-// without a device; the knob and empty-range tests need none.
+// and a throwing consumer leaves cleanly. The knobs are parsed and bounded, and a value out of
+// bounds throws. The copy tests skip without a device; the knob and empty-range tests need none.
 
 #include <cuda_runtime.h>
 #include <gtest/gtest.h>
@@ -192,15 +192,16 @@ TEST(StagedDownload, ZeroElementsTouchNothing) {
   EXPECT_EQ(calls, 0);
 }
 
-/// A chunk knob: unset or malformed or under 4096 gives the default, "8192" gives 8192.
+/// A chunk knob: unset or empty gives the default, "8192" gives 8192, and a value that is not a
+/// whole number from 4096 to 2^32 throws InvalidInputError naming the variable.
 void checkChunkKnob(const char* name, std::size_t (*chunk)(), std::size_t fallback) {
-  {
-    ScopedEnv c(name, nullptr);
+  for (const char* unset : {static_cast<const char*>(nullptr), ""}) {
+    ScopedEnv c(name, unset);
     EXPECT_EQ(chunk(), fallback);
   }
-  for (const char* bad : {"", "abc", "100", "4095", "-8192", "8192x"}) {
+  for (const char* bad : {"abc", "100", "4095", "-8192", "8192x", "4294967297"}) {
     ScopedEnv c(name, bad);
-    EXPECT_EQ(chunk(), fallback) << name << "='" << bad << "'";
+    EXPECT_THROW(chunk(), kdet_fcl::InvalidInputError) << name << "='" << bad << "'";
   }
   ScopedEnv c(name, "8192");
   EXPECT_EQ(chunk(), 8192u);
@@ -215,11 +216,9 @@ TEST(StagedUpload, KnobsAreParsedAndBounded) {
     EXPECT_EQ(uploadThreads(1), 1);
     EXPECT_EQ(uploadThreads(0), 1);
   }
-  for (const char* bad : {"0", "65", "x", "-1"}) {
+  for (const char* bad : {"0", "65", "x", "-1", "3 "}) {
     ScopedEnv t("KDET_FCL_CUDA_UPLOAD_THREADS", bad);
-    const int n = uploadThreads(1000);
-    EXPECT_GE(n, 1) << "'" << bad << "'";
-    EXPECT_LE(n, kdet_fcl::staging::kMaxUploadThreads) << "'" << bad << "'";
+    EXPECT_THROW(uploadThreads(1000), kdet_fcl::InvalidInputError) << "'" << bad << "'";
   }
   {
     ScopedEnv t("KDET_FCL_CUDA_UPLOAD_THREADS", nullptr);
