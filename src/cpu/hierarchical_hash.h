@@ -78,7 +78,7 @@ class HierarchicalHash {
     double diameter;
     std::uint32_t id;
     /// Bit a set: this cell is the first of the triangle's cells along axis a. Then the
-    /// canonical-cell test of a lookup (see scan.h) is three integer comparisons.
+    /// canonical-cell test of a lookup (see scan.h) is one mask test.
     std::uint8_t lo_mask;
   };
 

@@ -51,20 +51,22 @@ bool scanCandidates(const detail::HierarchicalHash<S>& h, const detail::Aabb<dou
           if (!slot) continue;
           ++st.cells_visited;
           const auto* cell = table.entries.data() + slot->begin;
+          // The canonical cell holds the overlap's minimum corner. cellCoord is monotone, so its
+          // coordinate on each axis is max(first cell of the query, first cell of the
+          // candidate): this is that cell iff on every axis it is the candidate's first cell or
+          // the query's (r.lo is the query's first cell: clipping to the bounds never moves it).
+          // So an entry passes iff its lo_mask holds every axis on which this cell is not the
+          // query's first: one mask test, computed once per cell.
+          const unsigned need = (x != r.lo[0] ? 1u : 0u) | (y != r.lo[1] ? 2u : 0u) |
+                                (z != r.lo[2] ? 4u : 0u);
           for (std::uint32_t k = 0; k < slot->count; ++k) {
             const auto& e = cell[k];
             const int verdict = accept(e.id, e.diameter);
             if (verdict < 0) break;  // the rest of the cell is smaller still
             if (verdict == 0) continue;
-            // The canonical cell holds the overlap's minimum corner. cellCoord is monotone, so its
-            // coordinate on each axis is max(first cell of the query, first cell of the
-            // candidate): this is that cell iff on every axis it is the candidate's first cell or
-            // the query's (r.lo is the query's first cell: clipping to the bounds never moves it).
             // The test needs no box, so it runs first: a pair seen from another cell of the
-            // query's range costs three integer comparisons, not a box test.
-            if (!(((e.lo_mask & 1) || x == r.lo[0]) && ((e.lo_mask & 2) || y == r.lo[1]) &&
-                  ((e.lo_mask & 4) || z == r.lo[2])))
-              continue;
+            // query's range costs one mask test, not a box test.
+            if ((e.lo_mask & need) != need) continue;
             ++st.box_tests;
             if (!detail::entryBoxesOverlap(qe, e.box)) continue;
             if (confirm && !detail::boxesOverlap(qbox, h.boxes[e.id])) continue;
