@@ -9,11 +9,127 @@
 #include <string>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "cpu/hierarchical_hash.h"
 #include "kept_self_result.h"
 #include "kdet_fcl/errors.h"
 
 namespace kdet_fcl {
+namespace {
+
+/// The running minimum, maximum and finiteness sum of one coordinate (finiteBounds).
+template <class S>
+struct Extent {
+  S lo = std::numeric_limits<S>::infinity(), hi = -std::numeric_limits<S>::infinity(), sum = 0;
+  void take(S x) {
+    sum += x - x;  // 0 for finite x, NaN otherwise; a NaN stays in the sum
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+};
+
+#if defined(__SSE2__)
+/// The SSE2 operations on four floats (__m128) or two doubles (__m128d) that finiteBounds uses.
+inline __m128 vSplat(float x) { return _mm_set1_ps(x); }
+inline __m128d vSplat(double x) { return _mm_set1_pd(x); }
+inline __m128 vLoad(const float* p) { return _mm_loadu_ps(p); }
+inline __m128d vLoad(const double* p) { return _mm_loadu_pd(p); }
+inline void vStore(float* p, __m128 x) { _mm_storeu_ps(p, x); }
+inline void vStore(double* p, __m128d x) { _mm_storeu_pd(p, x); }
+inline __m128 vAdd(__m128 a, __m128 b) { return _mm_add_ps(a, b); }
+inline __m128d vAdd(__m128d a, __m128d b) { return _mm_add_pd(a, b); }
+inline __m128 vSub(__m128 a, __m128 b) { return _mm_sub_ps(a, b); }
+inline __m128d vSub(__m128d a, __m128d b) { return _mm_sub_pd(a, b); }
+inline __m128 vMin(__m128 a, __m128 b) { return _mm_min_ps(a, b); }
+inline __m128d vMin(__m128d a, __m128d b) { return _mm_min_pd(a, b); }
+inline __m128 vMax(__m128 a, __m128 b) { return _mm_max_ps(a, b); }
+inline __m128d vMax(__m128d a, __m128d b) { return _mm_max_pd(a, b); }
+
+/// The vector form of Extent (V: four floats or two doubles): one register each for the minima,
+/// maxima and sums. vMin/vMax take the running value as their second operand, so that a NaN
+/// coordinate leaves it, as std::min(lo, x) does; the sums catch the NaN.
+template <class V, class S>
+struct Lanes {
+  V lo = vSplat(std::numeric_limits<S>::infinity());
+  V hi = vSplat(-std::numeric_limits<S>::infinity());
+  V sum = vSplat(S(0));
+  void take(V x) {
+    sum = vAdd(sum, vSub(x, x));
+    lo = vMin(x, lo);
+    hi = vMax(x, hi);
+  }
+};
+
+/// The coordinates of the first `count` vertices at `p` (count a multiple of W, the vertices per
+/// step) into e[0..2]: the step's 3 W values are loaded as three vectors of W lanes each, whose
+/// lane k of vector r holds axis (r W + k) mod 3.
+template <class V, class S>
+void takeVectors(const S* p, std::size_t count, Extent<S> e[3]) {
+  constexpr int W = int(sizeof(V) / sizeof(S));
+  Lanes<V, S> v[3];
+  for (std::size_t i = 0; i < 3 * count; i += 3 * W)
+    for (int r = 0; r < 3; ++r) v[r].take(vLoad(p + i + r * W));
+  for (int r = 0; r < 3; ++r) {
+    S l[W], h[W], t[W];
+    vStore(l, v[r].lo);
+    vStore(h, v[r].hi);
+    vStore(t, v[r].sum);
+    for (int k = 0; k < W; ++k) {
+      Extent<S>& a = e[(r * W + k) % 3];
+      a.sum += t[k];
+      a.lo = std::min(a.lo, l[k]);
+      a.hi = std::max(a.hi, h[k]);
+    }
+  }
+}
+
+/// The SSE2 vector of S.
+template <class S>
+struct VectorOf;
+template <>
+struct VectorOf<float> {
+  using type = __m128;
+};
+template <>
+struct VectorOf<double> {
+  using type = __m128d;
+};
+template <class S>
+using Vector = typename VectorOf<S>::type;
+/// Vertices per vector step.
+template <class S>
+constexpr std::size_t kStep = sizeof(Vector<S>) / sizeof(S);
+#endif
+
+/// The bounds of `v` in double (empty for no vertex), in one pass with no branch per vertex; false
+/// when a coordinate is not finite (its sum of x - x is then not 0). With SSE2, a step of 4 float
+/// or 2 double vertices is three vector loads feeding three independent chains of vector minima,
+/// maxima and sums; the scalar loop's three chains each wait on the latency of every step
+/// (updateVertices of the 92k cloth: 88-121 us with scalar loops, 31 us with this;
+/// benchmarks/RESULTS.md).
+template <class S>
+bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out) {
+  static_assert(sizeof(Vec3<S>) == 3 * sizeof(S), "Vec3 must be three packed coordinates");
+  Extent<S> e[3];
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  i = v.size() / kStep<S> * kStep<S>;
+  if (i > 0) takeVectors<Vector<S>>(&v[0].x, i, e);
+#endif
+  for (; i < v.size(); ++i) {
+    e[0].take(v[i].x);
+    e[1].take(v[i].y);
+    e[2].take(v[i].z);
+  }
+  *out = detail::Aabb<double>{{double(e[0].lo), double(e[1].lo), double(e[2].lo)},
+                              {double(e[0].hi), double(e[1].hi), double(e[2].hi)}};
+  return e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0);
+}
+
+}  // namespace
 
 template <class S>
 struct HashedMesh<S>::Lazy {
@@ -84,11 +200,18 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
     throw InvalidInputError("updateVertices: got " + std::to_string(vertices.size()) +
                             " vertices, the mesh has " + std::to_string(mesh_.vertices.size()) +
                             " (use setMesh() to change the topology)");
-  TriangleMesh<S> probe;  // validate the new coordinates before touching the mesh
-  probe.vertices = vertices;
-  probe.validate(false, "updateVertices");
-  mesh_.vertices = std::move(probe.vertices);
-  geometryChanged();
+  // One pass over the new coordinates checks them and gives their bounds, before the mesh is
+  // touched; then they are copied into the mesh's own buffer, which keeps its address (no
+  // allocation, no page faults; benchmarks/update_bench, RESULTS.md).
+  detail::Aabb<double> b;
+  if (!finiteBounds(vertices, &b)) {
+    TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
+    probe.vertices = vertices;
+    probe.validate(false, "updateVertices");
+    throw InvalidInputError("updateVertices: a non-finite coordinate");
+  }
+  std::copy(vertices.begin(), vertices.end(), mesh_.vertices.begin());
+  geometryChanged(b);
 }
 
 template <class S>
@@ -100,14 +223,15 @@ void HashedMesh<S>::setMesh(TriangleMesh<S> mesh) {
 
 template <class S>
 void HashedMesh<S>::geometryChanged() {
+  detail::Aabb<double> b;
+  const bool finite = finiteBounds(mesh_.vertices, &b);
+  (void)finite;  // validated by the caller
+  geometryChanged(b);
+}
+
+template <class S>
+void HashedMesh<S>::geometryChanged(const detail::Aabb<double>& b) {
   // noexcept in effect: nothing below allocates or throws.
-  const double inf = std::numeric_limits<double>::infinity();
-  detail::Aabb<double> b{{inf, inf, inf}, {-inf, -inf, -inf}};
-  for (const Vec3<S>& p : mesh_.vertices)
-    for (int a = 0; a < 3; ++a) {
-      b.lo[a] = std::min(b.lo[a], double(p[a]));
-      b.hi[a] = std::max(b.hi[a], double(p[a]));
-    }
   bounds_ = b;
   lazy_->fresh.store(false, std::memory_order_release);
   kept_self_->drop();  // a kept self result is of the old geometry

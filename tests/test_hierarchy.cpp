@@ -245,6 +245,90 @@ TEST(HashedMesh, RejectsBadInputAndKeepsState) {
   EXPECT_EQ(hm.numTriangles(), 1u);
 }
 
+// updateVertices checks and bounds the new positions in one pass and copies them into the mesh's
+// own buffer: the buffer keeps its address, the bounds equal those of the positions, and any
+// non-finite coordinate anywhere (NaN, +inf, -inf, each axis, first and last vertex) is refused
+// with the vertex named and the mesh left as it was.
+template <class S>
+void checkUpdateVerticesInPlace() {
+  HashedMesh<S> hm(makeSphere<S>({0, 0, 0}, 1, 12, 6));
+  const Vec3<S>* buffer = hm.mesh().vertices.data();
+  const std::size_t nv = hm.mesh().vertices.size();
+  std::vector<Vec3<S>> moved = hm.mesh().vertices;
+  for (std::size_t i = 0; i < nv; ++i)
+    moved[i] = {moved[i].x * S(3) - S(7), moved[i].y * S(0.5), -moved[i].z + S(1e3)};
+  const auto v0 = hm.version();
+  hm.updateVertices(moved);
+  EXPECT_EQ(hm.mesh().vertices.data(), buffer) << "the vertex buffer was reallocated";
+  EXPECT_EQ(hm.mesh().vertices, moved);
+  EXPECT_GT(hm.version(), v0);
+  detail::Aabb<double> want{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+  for (const Vec3<S>& p : moved)
+    for (int a = 0; a < 3; ++a) {
+      want.lo[a] = std::min(want.lo[a], double(p[a]));
+      want.hi[a] = std::max(want.hi[a], double(p[a]));
+    }
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(hm.localBounds().lo[a], want.lo[a]) << a;
+    EXPECT_EQ(hm.localBounds().hi[a], want.hi[a]) << a;
+  }
+  EXPECT_EQ(kdet_test::sorted(intersectSelf(hm).pairs), bruteForceIntersectSelf(hm.mesh()));
+  const S bad[] = {std::numeric_limits<S>::quiet_NaN(), std::numeric_limits<S>::infinity(),
+                   -std::numeric_limits<S>::infinity()};
+  for (const S x : bad)
+    for (const std::size_t i : {std::size_t(0), std::size_t(1), std::size_t(2), std::size_t(3),
+                                std::size_t(4), std::size_t(5), nv / 2, nv - 2, nv - 1})
+      for (int a = 0; a < 3; ++a) {
+        std::vector<Vec3<S>> v = moved;
+        v[i][a] = x;
+        const auto before = hm.version();
+        try {
+          hm.updateVertices(v);
+          ADD_FAILURE() << "accepted " << x << " at vertex " << i << " axis " << a;
+        } catch (const InvalidInputError& e) {
+          EXPECT_NE(std::string(e.what()).find("vertex " + std::to_string(i) + " "),
+                    std::string::npos)
+              << e.what();
+        }
+        EXPECT_EQ(hm.version(), before);
+        EXPECT_EQ(hm.mesh().vertices, moved);
+      }
+  EXPECT_EQ(hm.mesh().vertices.data(), buffer);
+  // The bounds see an extreme coordinate at any vertex and axis (every lane of the vector pass
+  // and the scalar tail), low and high, for vertex counts around the vector step.
+  for (std::size_t count : {std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(5),
+                            std::size_t(8), std::size_t(11)}) {
+    TriangleMesh<S> small;
+    for (std::size_t i = 0; i < count; ++i)
+      small.vertices.push_back({S(i % 3), S(i % 5) - S(2), S(i) * S(0.25)});
+    small.triangles.push_back({0, 0, 0});
+    HashedMesh<S> sm(small);
+    for (std::size_t i = 0; i < count; ++i)
+      for (int a = 0; a < 3; ++a)
+        for (const S x : {S(-1e6), S(1e6)}) {
+          std::vector<Vec3<S>> v = small.vertices;
+          v[i][a] = x;
+          sm.updateVertices(v);
+          const detail::Aabb<double>& b = sm.localBounds();
+          EXPECT_EQ(x < 0 ? b.lo[a] : b.hi[a], double(x)) << count << " " << i << " " << a;
+          for (int o = 0; o < 3; ++o) {
+            double lo = 1e300, hi = -1e300;
+            for (const Vec3<S>& p : v) {
+              lo = std::min(lo, double(p[o]));
+              hi = std::max(hi, double(p[o]));
+            }
+            EXPECT_EQ(b.lo[o], lo);
+            EXPECT_EQ(b.hi[o], hi);
+          }
+        }
+  }
+}
+
+TEST(HashedMesh, UpdateVerticesKeepsTheBufferAndBoundsInOnePass) {
+  checkUpdateVerticesInPlace<float>();
+  checkUpdateVerticesInPlace<double>();
+}
+
 TEST(HashedMesh, PoseChangesDoNotRehashDeformationsDo) {
   HashedMesh<double> hm(makeSphere<double>({0, 0, 0}, 1.0, 16, 8));
   const auto v0 = hm.version();

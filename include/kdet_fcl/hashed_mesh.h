@@ -61,8 +61,9 @@ class HashedMesh {
   const Transform<S>& pose() const { return pose_; }
 
   /// New vertex positions, same count and topology. Throws InvalidInputError (and leaves the
-  /// mesh unchanged) on a wrong count or a non-finite coordinate. Marks the CPU hash stale: it is
-  /// rebuilt by the next CPU query (or prepareCpuHash()), not here.
+  /// mesh unchanged) on a wrong count or a non-finite coordinate. The positions are copied into
+  /// the mesh's own vertex array, which keeps its address (mesh().vertices.data()). Marks the CPU
+  /// hash stale: it is rebuilt by the next CPU query (or prepareCpuHash()), not here.
   void updateVertices(const std::vector<Vec3<S>>& vertices);
 
   /// Replaces the whole mesh (topology change). Validates first; on error the old mesh is kept.
@@ -113,6 +114,8 @@ class HashedMesh {
  private:
   /// After a geometry change: a new version, fresh bounds, the CPU hash marked stale.
   void geometryChanged();
+  /// The same with the new bounds known (updateVertices computes them while checking).
+  void geometryChanged(const detail::Aabb<double>& bounds);
 
   struct Lazy;  // the lock and the "CPU hash is current" flag (on the heap: movable class)
 

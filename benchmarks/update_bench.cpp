@@ -1,0 +1,110 @@
+// update_bench: the host cost of a deforming frame's HashedMesh::updateVertices, next to its
+// floor and to the way it used to work, in the same process.
+//
+// For a draped cloth over a sphere (float, as the GPU benchmarks use) of about 92k, 250k and 1M
+// triangles, alternating between two frames' vertex arrays, the median over --reps calls of:
+//   updateVertices   the library call: one pass that checks every coordinate and gives the
+//                    bounds, then a copy into the mesh's own buffer;
+//   copy only        std::copy of the same array into a buffer of the same size (the floor: the
+//                    call cannot do less than read the input and write the mesh);
+//   copy, check, move  what updateVertices did before 2026-11-23: a copy into a new vector, the
+//                    check of that copy, the new vector moved into the mesh (the old buffer
+//                    freed), then a second pass for the bounds.
+// Each updateVertices is checked: the mesh must hold exactly the array passed in, in the same
+// buffer as before; a failure exits 1. Results: benchmarks/RESULTS.md.
+//
+// Usage: update_bench [--reps R] [--max-n N]   (N: the largest cloth grid side, default 700)
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <kdet_fcl/hashed_mesh.h>
+#include <kdet_fcl/scenes.h>
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+template <class F>
+double timeUs(F&& f) {
+  const auto a = Clock::now();
+  f();
+  return std::chrono::duration<double, std::micro>(Clock::now() - a).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int reps = 30, max_n = 700;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if ((a == "--reps" || a == "--max-n") && i + 1 < argc) {
+      const int v = std::atoi(argv[++i]);
+      if (v < 1) {
+        std::fprintf(stderr, "update_bench: %s needs a positive number\n", a.c_str());
+        return 2;
+      }
+      (a == "--reps" ? reps : max_n) = v;
+    } else {
+      std::fprintf(stderr, "usage: update_bench [--reps R] [--max-n N]\n");
+      return 2;
+    }
+  }
+  using S = float;
+  using kdet_fcl::Vec3;
+  std::printf("| triangles | vertex bytes | updateVertices (us) | copy only (us) | "
+              "copy, check, move (us) |\n|---:|---:|---:|---:|---:|\n");
+  for (int n : {215, 354, 700}) {
+    n = std::min(n, max_n);
+    const kdet_fcl::TriangleMesh<S> f0 = kdet_fcl::makeDrapedCloth<S>(n, 4, 1, S(0.03), S(0.5));
+    const std::vector<Vec3<S>> f1 = kdet_fcl::makeDrapedCloth<S>(n, 4, 1, S(0.03), S(0.7)).vertices;
+    kdet_fcl::HashedMesh<S> mesh(f0);
+    const Vec3<S>* buffer = mesh.mesh().vertices.data();
+    std::vector<Vec3<S>> dst = f0.vertices, held = f0.vertices;
+    std::vector<double> upd, copy, old;
+    volatile double sink = 0;
+    for (int r = 0; r <= reps; ++r) {  // the first round warms up and is not counted
+      const std::vector<Vec3<S>>& v = r % 2 ? f1 : f0.vertices;
+      const double tu = timeUs([&] { mesh.updateVertices(v); });
+      if (mesh.mesh().vertices != v || mesh.mesh().vertices.data() != buffer) {
+        std::fprintf(stderr, "update_bench: updateVertices did not store the array in place\n");
+        return 1;
+      }
+      const double tc = timeUs([&] { std::copy(v.begin(), v.end(), dst.begin()); });
+      const double to = timeUs([&] {
+        kdet_fcl::TriangleMesh<S> probe;
+        probe.vertices = v;
+        probe.validate(false, "update_bench");
+        held = std::move(probe.vertices);
+        const double inf = std::numeric_limits<double>::infinity();
+        double lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
+        for (const Vec3<S>& p : held)
+          for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], double(p[a]));
+            hi[a] = std::max(hi[a], double(p[a]));
+          }
+        sink += lo[0] + lo[1] + lo[2] + hi[0] + hi[1] + hi[2];  // keeps the bounds pass
+      });
+      if (r == 0) continue;
+      upd.push_back(tu);
+      copy.push_back(tc);
+      old.push_back(to);
+    }
+    std::printf("| %zu | %zu | %.0f | %.0f | %.0f |\n", f0.triangles.size(),
+                f0.vertices.size() * sizeof(Vec3<S>), median(upd), median(copy), median(old));
+    std::fflush(stdout);
+    if (n == max_n) break;
+  }
+  return 0;
+}
