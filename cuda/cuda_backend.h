@@ -32,13 +32,13 @@
 // exact tests (default on, Predicate::Exact only; read at every query) and
 // KDET_FCL_CUDA_FILTER_MINBLOCKS=6 caps the filter kernel at 40 registers (default uncapped);
 // these three are read at every query; KDET_FCL_CUDA_SYNC_REHASH=1 makes every re-hash read its
-// sizes back (the round-3 flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell keys everywhere and
-// KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces its fallback); these
-// three are read at every build, for tests. KDET_FCL_CUDA_SPANS=0|1 forces the sub-cell span
-// filter off or on (default: chosen per query, read at every query). KDET_FCL_CUDA_SCAN=tile
-// runs the older per-query tiles instead of the warp-wide candidate search (read at every query;
-// a mesh hashed while it is set lists each cell's triangles by size, which only the tile scan
-// uses, and a build for the warp scan skips that sort); KDET_FCL_CUDA_WARP_LANES=1..32 forces the
+// sizes back (the round-3 flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell
+// keys everywhere and KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces
+// its fallback); these three are read at every build, for tests. KDET_FCL_CUDA_SPANS=0|1 forces
+// the sub-cell span filter off or on (default: chosen per query, read at every query).
+// KDET_FCL_CUDA_SCAN=tile runs the older per-query tiles instead of the warp-wide candidate
+// search (read at every query; a mesh hashed while it is set lists each cell's triangles by size,
+// which only the tile scan uses, and a build for the warp scan skips that sort); KDET_FCL_CUDA_WARP_LANES=1..32 forces the
 // warp scan's lanes per query, KDET_FCL_CUDA_WARP_VISIT=k cuts its cells into visits of k entries
 // and KDET_FCL_CUDA_WARP_TASKS=0 gives each warp one task instead of a counter to take them from;
 // KDET_FCL_CUDA_SELF_CELLS=0|1 makes a self query scan every level from each triangle's own, or
