@@ -37,8 +37,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <cstdlib>
-#include <cstring>
 #include <list>
 #include <map>
 #include <memory>
@@ -1333,18 +1331,13 @@ void cubCall(Context& ctx, F&& f) {
   CUDA_TRY(f(static_cast<void*>(ctx.cub_temp.data()), bytes));
 }
 
-/// A knob that forces a choice: the environment variable `name` = 0 (off) or 1 (on), else
-/// `otherwise` (the choice's own rule); any other value throws (kdet_fcl/detail/knobs.h). Read
-/// at every call.
-bool knobOr(const char* name, bool otherwise) { return detail::switchKnob(name, otherwise); }
-
 /// KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads the sizes back (the round-3 behaviour, for
 /// comparisons). Read at every build.
-bool syncRehash() { return knobOr("KDET_FCL_CUDA_SYNC_REHASH", false); }
+bool syncRehash() { return detail::switchKnob("KDET_FCL_CUDA_SYNC_REHASH", false); }
 
 /// KDET_FCL_CUDA_FULL_KEYS=1: 128-bit cell keys even where the compact 64-bit key is exact
 /// (tests). Read at every build.
-bool fullKeys() { return knobOr("KDET_FCL_CUDA_FULL_KEYS", false); }
+bool fullKeys() { return detail::switchKnob("KDET_FCL_CUDA_FULL_KEYS", false); }
 
 /// Candidates per query triangle of a mesh's last query above which its cells count as crowded
 /// (the UNC cloth ball 8.4, the two frames 21; smooth cloths 1.6-3.4, the n-body 1.1): the rule
@@ -1364,7 +1357,7 @@ std::uint32_t rehashCap(std::uint32_t cap) {
 }
 
 /// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
-bool rehashGraphOn() { return knobOr("KDET_FCL_CUDA_REHASH_GRAPH", true); }
+bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", true); }
 
 /// Whether a build of `m` records, per triangle, the levels above its own that hold a cell of its
 /// range (upperLevelsKernel): KDET_FCL_CUDA_UPPER_LEVELS = 0 (never), 1 (always), unset (while
@@ -1376,7 +1369,7 @@ bool rehashGraphOn() { return knobOr("KDET_FCL_CUDA_REHASH_GRAPH", true); }
 /// levels with a cell in range) stayed level, and the joint two cloth-ball frames (21) lost
 /// 0.01-0.08 ms in every call. The choice changes the work, never the pairs.
 bool upperLevelsFor(double self_density) {
-  return knobOr("KDET_FCL_CUDA_UPPER_LEVELS", self_density <= kCrowdedDensity);
+  return detail::switchKnob("KDET_FCL_CUDA_UPPER_LEVELS", self_density <= kCrowdedDensity);
 }
 
 /// The device part of rebuild() after the uploads: everything a re-hash without read-back
@@ -1861,21 +1854,22 @@ unsigned long long capacityKnob() {
 
 /// The plane filter between the phases (Predicate::Exact only): KDET_FCL_CUDA_PLANE_FILTER=0
 /// turns it off (default on; read at every query, so tests and benchmarks can compare both).
-bool planeFilterOn() { return knobOr("KDET_FCL_CUDA_PLANE_FILTER", true); }
+bool planeFilterOn() { return detail::switchKnob("KDET_FCL_CUDA_PLANE_FILTER", true); }
 
 /// The candidates one round of a query may hold per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES
-/// = k from 0 to 2^20, read at every query; default 14; 0: no limit). A query whose phase 1 gives more (two
-/// near-coincident cloth frames hashed as one give 21 per triangle) runs its tasks in rounds
-/// that reuse the candidate buffer, so that the buffer holds about k per triangle (8 bytes
-/// each), not all of them (runQuery). Each extra round costs time (on an H100, 0.3 ms on those
-/// two frames: benchmarks/RESULTS-gpu.md); 14 keeps them under 256 bytes per triangle with two
-/// rounds. Without the knob the limit is at least 2^16 candidates; with it, exactly k per
+/// = k from 0 to 2^20, read at every query; default 14; 0: no limit). A query whose phase 1
+/// gives more (two near-coincident cloth frames hashed as one give 21 per triangle) runs its
+/// tasks in rounds that reuse the candidate buffer, so that the buffer holds about k per
+/// triangle (8 bytes each), not all of them (runQuery). Each extra round costs time (on an H100,
+/// 0.3 ms on those two frames: benchmarks/RESULTS-gpu.md); 14 keeps them under 256 bytes per
+/// triangle with two rounds. Without the knob the limit is at least 2^16 candidates; with it, exactly k per
 /// triangle (tests force many rounds on small meshes).
 std::size_t roundCandidateLimit(std::size_t work) {
-  const char* name = "KDET_FCL_CUDA_ROUND_CANDIDATES";
-  if (detail::knobText(name) == nullptr)
-    return std::max<std::size_t>(std::size_t(1) << 16, 14 * work);
-  return static_cast<std::size_t>(detail::numberKnob(name, 0, 1u << 20, 0)) * work;
+  constexpr std::uint64_t kUnset = ~std::uint64_t(0);
+  const std::uint64_t k =
+      detail::numberKnob("KDET_FCL_CUDA_ROUND_CANDIDATES", 0, 1u << 20, kUnset);
+  if (k == kUnset) return std::max<std::size_t>(std::size_t(1) << 16, 14 * work);
+  return static_cast<std::size_t>(k) * work;
 }
 
 /// Rounds for `candidates` candidates under the limit: one while they fit in it, else each round
@@ -2105,8 +2099,9 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
 }
 
 /// Lanes per query triangle in the candidate search: KDET_FCL_CUDA_TILE = 1, 4, 8, 16 or 32
-/// (default 8; read at every query). Larger tiles suit heavily loaded cells (crumpled cloth), smaller ones
-/// lightly loaded cells, where the repeated lookups dominate (benchmarks/RESULTS-gpu.md).
+/// (default 8; read at every query). Larger tiles suit heavily loaded cells (crumpled cloth),
+/// smaller ones lightly loaded cells, where the repeated lookups dominate
+/// (benchmarks/RESULTS-gpu.md).
 int tileSize() {
   return static_cast<int>(detail::choiceKnob("KDET_FCL_CUDA_TILE", {1, 4, 8, 16, 32}, 8));
 }
@@ -2121,7 +2116,7 @@ int tileSize() {
 /// 1.1, smooth cloth 1.6-3.4: +10 to +25 %), where the density rule leaves it off
 /// (benchmarks/RESULTS-gpu.md). The choice changes the work, never the pairs.
 bool spansFor(double density) {
-  return knobOr("KDET_FCL_CUDA_SPANS", density > kCrowdedDensity);
+  return detail::switchKnob("KDET_FCL_CUDA_SPANS", density > kCrowdedDensity);
 }
 
 /// Whether phase 1 runs the warp-wide scan (scanCandidatesWarp: 1-8 lanes per query triangle, the
@@ -2165,7 +2160,7 @@ std::uint32_t warpVisit() {
 /// resident blocks (KDET_FCL_CUDA_WARP_TASKS unset or 1), or run one warp per task on a grid
 /// that covers them all (0). Read at every query, so tests and benchmarks can compare the two.
 /// Both give the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
-bool dynamicWarpTasks() { return knobOr("KDET_FCL_CUDA_WARP_TASKS", true); }
+bool dynamicWarpTasks() { return detail::switchKnob("KDET_FCL_CUDA_WARP_TASKS", true); }
 
 /// The grid and task counter of a warp-wide candidate kernel with `tasks` warp tasks. With the
 /// counter (kWarpTaskLoop<S> and dynamicWarpTasks()): no more blocks of kQueryBlock threads than
@@ -2213,7 +2208,7 @@ WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long t
 /// saves. KDET_FCL_CUDA_SELF_CELLS = 1 or 0 forces it on or off (read at every query, so tests and
 /// benchmarks can compare the two). Both give the same candidates.
 bool selfCellPairs(std::size_t entries) {
-  return knobOr("KDET_FCL_CUDA_SELF_CELLS",
+  return detail::switchKnob("KDET_FCL_CUDA_SELF_CELLS",
                 entries >= 48 * 32 * static_cast<std::size_t>(g_num_sms));
 }
 
@@ -2556,13 +2551,14 @@ AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<
 
 /// KDET_FCL_CUDA_JOINT=0 runs the three queries of intersectAll instead of one joint query
 /// (read at every call).
-bool jointOn() { return knobOr("KDET_FCL_CUDA_JOINT", true); }
+bool jointOn() { return detail::switchKnob("KDET_FCL_CUDA_JOINT", true); }
 
 /// Reads every knob of the CUDA backend once, so that a value a knob does not accept throws
 /// InvalidInputError (naming the variable) before a query enqueues any work, not half-way
 /// through it. Each knob is read through the function that the query itself uses. With no
 /// KDET_FCL_CUDA_* variable set (a user's usual case) it returns after one pass over the
-/// environment; reading them all costs about 6 us on a 2-core Xeon.
+/// environment (0.14 us here); reading them all costs about 6 us on this project's 2-core CI
+/// machine.
 void readEveryKnob() {
   if (!detail::someKnobSet("KDET_FCL_CUDA_")) return;
   (void)syncRehash();

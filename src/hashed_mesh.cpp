@@ -63,12 +63,16 @@ struct Lanes {
   }
 };
 
-/// The coordinates of the first `count` vertices at `p` (count a multiple of W, the vertices per
-/// step) into e[0..2]: the step's 3 W values are loaded as three vectors of W lanes each, whose
-/// lane k of vector r holds axis (r W + k) mod 3.
+/// Lanes of S in the vector V.
+template <class V, class S>
+constexpr int kLanes = int(sizeof(V) / sizeof(S));
+
+/// The coordinates of the first `count` vertices at `p` (count a multiple of W = kLanes, the
+/// vertices per step) into e[0..2]: the step's 3 W values are loaded as three vectors of W lanes
+/// each, whose lane k of vector r holds axis (r W + k) mod 3.
 template <class V, class S>
 void takeVectors(const S* p, std::size_t count, Extent<S> e[3]) {
-  constexpr int W = int(sizeof(V) / sizeof(S));
+  constexpr int W = kLanes<V, S>;
   Lanes<V, S> v[3];
   for (std::size_t i = 0; i < 3 * count; i += 3 * W)
     for (int r = 0; r < 3; ++r) v[r].take(vLoad(p + i + r * W));
@@ -99,9 +103,9 @@ struct VectorOf<double> {
 };
 template <class S>
 using Vector = typename VectorOf<S>::type;
-/// Vertices per vector step.
+/// Vertices per vector step: one per lane.
 template <class S>
-constexpr std::size_t kStep = sizeof(Vector<S>) / sizeof(S);
+constexpr std::size_t kStep = kLanes<Vector<S>, S>;
 #endif
 
 /// The bounds of `v` in double (empty for no vertex), in one pass with no branch per vertex; false
