@@ -18,12 +18,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
 
+#include <kdet_fcl/detail/knobs.h>
 #include <kdet_fcl/hashed_mesh.h>
 #include <kdet_fcl/scenes.h>
 
@@ -50,12 +51,13 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if ((a == "--reps" || a == "--max-n") && i + 1 < argc) {
-      const int v = std::atoi(argv[++i]);
-      if (v < 1) {
-        std::fprintf(stderr, "update_bench: %s needs a positive number\n", a.c_str());
+      std::uint64_t v = 0;
+      if (!kdet_fcl::detail::parseWholeNumber(argv[++i], &v) || v < 1 || v > 1000000) {
+        std::fprintf(stderr, "update_bench: %s needs a whole number from 1 to 1000000, got '%s'\n",
+                     a.c_str(), argv[i]);
         return 2;
       }
-      (a == "--reps" ? reps : max_n) = v;
+      (a == "--reps" ? reps : max_n) = int(v);
     } else {
       std::fprintf(stderr, "usage: update_bench [--reps R] [--max-n N]\n");
       return 2;
