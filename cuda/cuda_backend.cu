@@ -505,14 +505,13 @@ __global__ void __launch_bounds__(kBuildBlock)
 }
 
 /// One thread per slot: a claimed slot becomes a cell (the next index of info->cells), with its
-/// count, its compact key in cell_key and the slot rewritten to the lookup form. Cells at or past
+/// count (read from slot_words[s], which then holds the cell: ~0u for one not stored), its
+/// compact key in cell_key and the slot rewritten to the lookup form. Cells at or past
 /// `cell_cap` are counted but not stored (countFillKernel has set need_sync then), and their
 /// slots are emptied. After need_sync every slot is emptied and nothing else is written: the
 /// queries that run before the fallback then find no cell and read nothing past the arrays.
 __global__ void countCellsKernel(BuildInfo* info, unsigned long long* slots,
-                                 std::uint32_t slot_count,
-                                 const std::uint32_t* __restrict__ slot_cnt,
-                                 std::uint32_t* __restrict__ slot_cell,
+                                 std::uint32_t slot_count, std::uint32_t* __restrict__ slot_words,
                                  std::uint32_t* __restrict__ cell_count,
                                  unsigned long long* __restrict__ cell_key, std::uint32_t cell_cap) {
   const std::uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
@@ -525,14 +524,14 @@ __global__ void countCellsKernel(BuildInfo* info, unsigned long long* slots,
   if (key == kEmptySlot) return;
   const std::uint32_t c = atomicAdd(&info->cells, 1u);
   if (c >= cell_cap) {
-    slot_cell[s] = ~0u;
+    slot_words[s] = ~0u;
     slots[s] = kEmptySlot;
     return;
   }
   const detail::CellId id = compactKeyCell(key, info->coord_bits);
   const unsigned long long h = detail::hashCellKey(detail::makeCellKey(id.level, id.x, id.y, id.z));
-  slot_cell[s] = c;
-  cell_count[c] = slot_cnt[s];
+  cell_count[c] = slot_words[s];
+  slot_words[s] = c;
   cell_key[c] = key;
   slots[s] = ((h >> 32) << 32) | c;
 }
@@ -1560,7 +1559,13 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   trianglesKernel<S><<<tri_blocks, kBuildBlock, 0, s>>>(n, m.v.data(), m.t.data(), m.box.data(),
                                                         m.diam.data(), ctx.red.data());
   checkLaunch();
-  gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? m.sort_bits : 0);
+  // A re-hash without read-back whose cells need no size order groups its entries by counting
+  // (countFillKernel), not by a sort; its compact keys then need only fit in 64 bits, not in the
+  // sort's bits.
+  const bool count_build = async && !m.size_ordered && countBuildOn();
+  m.count_build = count_build;
+  if (count_build) ++ctx.profile.count_builds;
+  gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? (count_build ? 64 : m.sort_bits) : 0);
   checkLaunch();
   countKernel<S><<<blocksFor(nt + 1, kBuildBlock), kBuildBlock, 0, s>>>(
       n, m.box.data(), m.diam.data(), dinfo, m.level.data(), tri_counts,
@@ -1614,11 +1619,6 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   const std::uint32_t cap = async ? rehashCap(m.entry_cap) : m.entry_cap;
   const std::uint32_t cell_cap = async ? rehashCap(m.cell_cap) : 0;  // sync: set below
   const unsigned int eb = blocksFor(cap, kBuildBlock);
-  // A re-hash without read-back whose cells need no size order groups its entries by counting
-  // (countFillKernel), not by a sort.
-  const bool count_build = async && !m.size_ordered && countBuildOn();
-  m.count_build = count_build;
-  if (count_build) ++ctx.profile.count_builds;
 
   // The entry-sized scratch of the sort lives in the candidate buffer of the queries, which is
   // idle during a build (same stream, and the context's mutex serialises the calls): no separate
@@ -1627,18 +1627,17 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   const std::size_t e4 = ((static_cast<std::size_t>(cap) + 1) / 2 + 31) & ~std::size_t(31);
   if (count_build) {
     // The counting build (countFillKernel): its scratch in the same idle buffer, in 32-bit
-    // arrays: per entry its slot, rank and value; per slot its count and cell; per cell its
+    // arrays: per entry its slot, rank and value; per slot its count, then its cell; per cell its
     // count.
     auto words = [](std::size_t k) { return ((k + 1) / 2 + 31) & ~std::size_t(31); };
     const std::size_t s4 = words(m.slot_count), c4 = words(std::size_t(cell_cap) + 1);
-    ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + 2 * s4 + c4));
+    ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + s4 + c4));
     std::uint32_t* const at = reinterpret_cast<std::uint32_t*>(ctx.cands.data());
     std::uint32_t* const ent_slot = at;
     std::uint32_t* const ent_rank = at + 2 * e4;
     std::uint32_t* const ent_val = at + 4 * e4;
-    std::uint32_t* const slot_cnt = at + 6 * e4;
-    std::uint32_t* const slot_cell = slot_cnt + 2 * s4;
-    std::uint32_t* const cell_count = slot_cell + 2 * s4;
+    std::uint32_t* const slot_cnt = at + 6 * e4;  // the slot's cell after countCellsKernel
+    std::uint32_t* const cell_count = slot_cnt + 2 * s4;
     countClearKernel<<<std::min<unsigned int>(blocksFor(std::max<std::size_t>(m.slot_count,
                                                                                 cell_cap + 1ull),
                                                         kBuildBlock),
@@ -1651,15 +1650,14 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
         ent_slot, ent_rank, ent_val, cap, cell_cap);
     checkLaunch();
     countCellsKernel<<<blocksFor(m.slot_count, kBuildBlock), kBuildBlock, 0, s>>>(
-        dinfo, m.slots.data(), m.slot_count, slot_cnt, slot_cell, cell_count, m.cell_key.data(),
-        cell_cap);
+        dinfo, m.slots.data(), m.slot_count, slot_cnt, cell_count, m.cell_key.data(), cell_cap);
     checkLaunch();
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
       return cub::DeviceScan::ExclusiveSum(tmp, bytes, cell_count, m.cell_begin.data(),
                                            static_cast<int>(cell_cap + 1), s);
     });
     scatterKernel<S><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, ent_slot, ent_rank, ent_val,
-                                                slot_cell, m.cell_begin.data(),
+                                                slot_cnt, m.cell_begin.data(),
                                                 m.cell_key.data(), m.box.data(),
                                                 m.entry_tri.data(), m.entry_span.data(),
                                                 m.block_cell.data());
@@ -1836,7 +1834,7 @@ void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     if (countBuildOn() && !m.size_ordered) {  // the counting build's scratch and scan
       const std::uint32_t cell_cap = rehashCap(m.cell_cap);
       auto words = [](std::size_t k) { return ((k + 1) / 2 + 31) & ~std::size_t(31); };
-      ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + 2 * words(m.slot_count) +
+      ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + words(m.slot_count) +
                                                   words(std::size_t(cell_cap) + 1)));
       CUDA_TRY(cub::DeviceScan::ExclusiveSum(nullptr, b, p, p, static_cast<int>(cell_cap + 1), s));
       need = std::max(need, b);
@@ -1900,6 +1898,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     m.pending_entry_cap = cap;
     m.pending_cell_cap = cell_cap;
     ++ctx.profile.rehashes_async;
+    m.count_build = !m.size_ordered && countBuildOn();  // as captured (the graph's key)
     if (m.count_build) ++ctx.profile.count_builds;
   }
   ++ctx.profile.rehash_graphs;

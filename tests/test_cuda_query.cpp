@@ -1323,6 +1323,8 @@ TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
       {"cloth", &cloth}, {"crowded soup", &crowded}, {"soup of sizes", &sizes}};
   for (const auto& sm : selfs)
     EXPECT_EQ(self(*sm.second).pairs, sorted(intersectSelf(*sm.second).pairs)) << sm.first;
+  EXPECT_EQ(inter(cloth, sphere).pairs, sorted(intersectMeshes(cloth, sphere).pairs));
+  // (first builds, with read-backs: the sphere's too)
   std::size_t counted = 0;
   for (double t : {0.6, 0.8, 1.0}) {
     cloth.updateVertices(clothAt(t).vertices);
@@ -1344,7 +1346,10 @@ TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
         }
         EXPECT_EQ(by_count.profile.rehashes_async, 1) << w;
         EXPECT_EQ(by_count.profile.count_builds, 1) << w;
-        EXPECT_EQ(by_count.profile.rehash_fallbacks, 0) << w;
+        // The cloth's new frames may outgrow the arrays of its last build (then one fallback);
+        // the soups keep their geometry.
+        if (m != &cloth) EXPECT_EQ(by_count.profile.rehash_fallbacks, 0) << w;
+        EXPECT_LE(by_count.profile.rehash_fallbacks, 1) << w;
         EXPECT_EQ(by_sort.profile.rehashes_async, 1) << w;
         EXPECT_EQ(by_sort.profile.count_builds, 0) << w;
         EXPECT_EQ(by_count.pairs, cpu) << w;
@@ -1378,7 +1383,7 @@ TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
   {
     // The tile scan wants its cells by size: the sort.
     kdet_test::ScopedEnv tile("KDET_FCL_CUDA_SCAN", "tile");
-    self(cloth);  // the first build for the tile scan lays the cells out by size
+    self(cloth);  // a re-hash (by the sort) that lays the cells out by size
     const Run r = self(cloth);
     EXPECT_EQ(r.profile.rehashes_async, 1);
     EXPECT_EQ(r.profile.count_builds, 0);
