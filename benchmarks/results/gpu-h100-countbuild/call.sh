@@ -1,7 +1,7 @@
 #!/bin/bash
 # The planned check of branch count-build (one device call; needs .fcl-debs, .gpu-data carried): build, ctest -L cuda, memcheck on the new test, A/B of the counting build, ncu of the build kernels.
 set -u
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../../.."
 FINAL=$OUT
 OUT=$FINAL/w
 mkdir -p $OUT
