@@ -104,6 +104,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_SYNC_REHASH", on_off, not_on_off},
       {"KDET_FCL_CUDA_FULL_KEYS", on_off, not_on_off},
       {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},
+      {"KDET_FCL_CUDA_COUNT_BUILD", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
