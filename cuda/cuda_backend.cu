@@ -1509,7 +1509,7 @@ bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", t
 
 /// Whether a re-hash without read-back may group its entries by counting instead of sorting them
 /// (countFillKernel); KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort (read at every build).
-bool countBuildOn() { return knobOr("KDET_FCL_CUDA_COUNT_BUILD", true); }
+bool countBuildOn() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", true); }
 
 /// Whether a build of `m` records, per triangle, the levels above its own that hold a cell of its
 /// range (upperLevelsKernel): KDET_FCL_CUDA_UPPER_LEVELS = 0 (never), 1 (always), unset (while
