@@ -132,6 +132,9 @@ struct QueryProfile {
                                 ///< 128-bit keys, KDET_FCL_CUDA_SYNC_REHASH=1, or a fallback)
   int rehash_fallbacks = 0;     ///< re-hashes that did not fit and were rebuilt (query rerun)
   int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
+  int count_builds = 0;         ///< of the re-hashes without read-back, those that grouped their
+                                ///< entries by counting in the cell table, not by a sort
+                                ///< (KDET_FCL_CUDA_COUNT_BUILD=0: never)
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
   bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)

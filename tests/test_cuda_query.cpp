@@ -104,6 +104,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_SYNC_REHASH", on_off, not_on_off},
       {"KDET_FCL_CUDA_FULL_KEYS", on_off, not_on_off},
       {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},
+      {"KDET_FCL_CUDA_COUNT_BUILD", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
@@ -1270,6 +1271,137 @@ TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
     }
   }
   unsetenv("KDET_FCL_CUDA_REHASH_GRAPH");
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
+  // A re-hash without read-back of a mesh whose cells need no size order (the warp scan, the
+  // default) groups its entries by counting them in the cell table (countFillKernel) instead of
+  // sorting them; KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort. The order of the cells, and of the
+  // entries inside a cell, then follows the atomics, but the candidates and the pairs must be
+  // the sort's and the CPU's at every frame: self queries (with the cells' pairs on and off),
+  // inter queries both ways and the joint query, on a deforming cloth over a sphere, a crowded
+  // soup (dozens of entries per cell) and a soup of many sizes. The tile scan (cells by size)
+  // keeps the sort. Forced overflows of the cells and entries (KDET_FCL_CUDA_REHASH_CAP) fall
+  // back to a build with read-backs, with the same pairs.
+  KDET_SKIP_WITHOUT_DEVICE();
+  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no counting build)";
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
+  kdet_test::ScopedEnv warp("KDET_FCL_CUDA_SCAN", "warp");
+  cuda::setProfiling(true);
+  struct Run {
+    std::vector<TrianglePair> pairs;
+    std::size_t candidates = 0;
+    cuda::QueryProfile profile;
+  };
+  auto self = [](const HashedMesh<S>& m) {
+    cuda::markDeformed(m);
+    Run r;
+    r.pairs = intersectSelf(m, on(Backend::Cuda)).pairs;
+    r.profile = cuda::lastQueryProfile();
+    r.candidates = r.profile.candidates;
+    return r;
+  };
+  auto inter = [](const HashedMesh<S>& a, const HashedMesh<S>& b) {
+    cuda::markDeformed(a);
+    cuda::markDeformed(b);
+    Run r;
+    r.pairs = intersectMeshes(a, b, on(Backend::Cuda)).pairs;
+    r.profile = cuda::lastQueryProfile();
+    r.candidates = r.profile.candidates;
+    return r;
+  };
+  auto clothAt = [](double t) { return makeDrapedCloth<S>(60, 4, 1, S(0.03), S(t)); };
+  HashedMesh<S> cloth(clothAt(0.5)), next(clothAt(0.55));
+  HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
+  HashedMesh<S> crowded(makeRandomSoup<S>(4000, S(0.3), S(0.05), S(0.3), 7));
+  HashedMesh<S> sizes(makeRandomSoup<S>(4001, 1, S(1e-3), S(0.2), 9));
+  const std::pair<const char*, HashedMesh<S>*> selfs[] = {
+      {"cloth", &cloth}, {"crowded soup", &crowded}, {"soup of sizes", &sizes}};
+  for (const auto& sm : selfs)
+    EXPECT_EQ(self(*sm.second).pairs, sorted(intersectSelf(*sm.second).pairs)) << sm.first;
+  EXPECT_EQ(inter(cloth, sphere).pairs, sorted(intersectMeshes(cloth, sphere).pairs));
+  // (first builds, with read-backs: the sphere's too)
+  std::size_t counted = 0;
+  for (double t : {0.6, 0.8, 1.0}) {
+    cloth.updateVertices(clothAt(t).vertices);
+    next.updateVertices(clothAt(t + 0.05).vertices);
+    const std::string at = "t = " + std::to_string(t);
+    for (const auto& [what, m] : selfs) {
+      const std::vector<TrianglePair> cpu = sorted(intersectSelf(*m).pairs);
+      for (const char* cells : {"0", "1"}) {
+        kdet_test::ScopedEnv cells_env("KDET_FCL_CUDA_SELF_CELLS", cells);
+        const std::string w = std::string(what) + ", " + at + ", self cells " + cells;
+        Run by_count, by_sort;
+        {
+          kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", nullptr);  // the default
+          by_count = self(*m);
+        }
+        {
+          kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "0");
+          by_sort = self(*m);
+        }
+        EXPECT_EQ(by_count.profile.rehashes_async, 1) << w;
+        EXPECT_EQ(by_count.profile.count_builds, 1) << w;
+        // The cloth's new frames may outgrow the arrays of its last build (then one fallback);
+        // the soups keep their geometry.
+        if (m != &cloth) EXPECT_EQ(by_count.profile.rehash_fallbacks, 0) << w;
+        EXPECT_LE(by_count.profile.rehash_fallbacks, 1) << w;
+        EXPECT_EQ(by_sort.profile.rehashes_async, 1) << w;
+        EXPECT_EQ(by_sort.profile.count_builds, 0) << w;
+        EXPECT_EQ(by_count.pairs, cpu) << w;
+        EXPECT_EQ(by_sort.pairs, cpu) << w;
+        EXPECT_EQ(by_count.candidates, by_sort.candidates) << w;
+        counted += cpu.size();
+      }
+    }
+    // Inter queries, both meshes re-hashed, both ways; then the joint query of two frames.
+    const std::vector<TrianglePair> cpu = sorted(intersectMeshes(cloth, sphere).pairs);
+    const Run a = inter(cloth, sphere), b = inter(sphere, cloth);
+    EXPECT_EQ(a.profile.count_builds, 2) << at;
+    EXPECT_EQ(a.pairs, cpu) << at;
+    EXPECT_EQ(b.pairs, sorted(intersectMeshes(sphere, cloth).pairs)) << at;
+    {
+      kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "0");
+      const Run c = inter(cloth, sphere);
+      EXPECT_EQ(c.profile.count_builds, 0) << at;
+      EXPECT_EQ(c.candidates, a.candidates) << at;
+    }
+    cuda::markDeformed(cloth);
+    cuda::markDeformed(next);
+    const AllPairsResult all = intersectAll(cloth, next, on(Backend::Cuda));
+    EXPECT_TRUE(cuda::lastQueryProfile().joint) << at;
+    EXPECT_EQ(all.self_a.pairs, sorted(intersectSelf(cloth).pairs)) << at << ": joint self a";
+    EXPECT_EQ(all.self_b.pairs, sorted(intersectSelf(next).pairs)) << at << ": joint self b";
+    EXPECT_EQ(all.inter.pairs, sorted(intersectMeshes(cloth, next).pairs)) << at << ": joint inter";
+    counted += cpu.size() + all.inter.pairs.size();
+  }
+  EXPECT_GT(counted, 1000u);
+  {
+    // The tile scan wants its cells by size: the sort.
+    kdet_test::ScopedEnv tile("KDET_FCL_CUDA_SCAN", "tile");
+    self(cloth);  // a re-hash (by the sort) that lays the cells out by size
+    const Run r = self(cloth);
+    EXPECT_EQ(r.profile.rehashes_async, 1);
+    EXPECT_EQ(r.profile.count_builds, 0);
+    EXPECT_EQ(r.pairs, sorted(intersectSelf(cloth).pairs));
+  }
+  self(cloth);
+  for (const char* cap : {"1", "100", "2000"}) {
+    // Too many cells or entries for the arrays: counted, not stored, and the fallback.
+    kdet_test::ScopedEnv cap_env("KDET_FCL_CUDA_REHASH_CAP", cap);
+    for (const auto& [what, m] : selfs) {
+      const std::string w = std::string(what) + ", cap " + cap;
+      const Run r = self(*m);
+      EXPECT_EQ(r.profile.count_builds, 1) << w;
+      EXPECT_EQ(r.profile.rehash_fallbacks, 1) << w;
+      EXPECT_EQ(r.pairs, sorted(intersectSelf(*m).pairs)) << w;
+    }
+  }
   cuda::setProfiling(false);
 #endif
 }
