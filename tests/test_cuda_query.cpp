@@ -104,6 +104,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_SYNC_REHASH", on_off, not_on_off},
       {"KDET_FCL_CUDA_FULL_KEYS", on_off, not_on_off},
       {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},
+      {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
@@ -319,6 +320,59 @@ TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
   cloth.setMesh(shuffled);
   expectSameInter(cloth, sphere, "shuffled triangles");
   expectSameSelf(cloth, "shuffled self");
+}
+
+// Vertex arrays of 1 MiB and up are registered as page-locked memory on their first upload and
+// copied straight from the mesh's buffer (QueryProfile::pinned_uploads), frame after frame, as
+// long as the buffer stays (updateVertices keeps it); a new buffer (setMesh) is registered anew,
+// a mesh's registration goes with it (a new mesh, perhaps at the same address, registers again),
+// both parts of a joint query are registered, small arrays are staged, and
+// KDET_FCL_CUDA_PIN_VERTICES=0 stages everything. Every answer equals the CPU's.
+TEST(CudaQuery, LargeVertexArraysAreCopiedStraightFromTheirRegisteredBuffer) {
+  KDET_SKIP_WITHOUT_DEVICE();
+  kdet_test::ScopedEnv pin_default("KDET_FCL_CUDA_PIN_VERTICES", nullptr);
+  cuda::setProfiling(true);
+  const int n = 320;  // 321^2 float vertices: 1.24 MB
+  auto frame = [&](double t) { return makeDrapedCloth<float>(n, 4.0f, 1.0f, 0.03f, float(t)); };
+  ASSERT_GE(frame(0).vertices.size() * sizeof(Vec3<float>), std::size_t(1) << 20);
+  HashedMesh<float> sphere(makeSphere<float>({0, 0, 0}, 1.0f, 32, 16));  // small: staged
+  HashedMesh<float> cloth(frame(0.2));
+  auto uploads = [&](const std::string& what) {
+    expectSameInter(cloth, sphere, what);
+    return cuda::lastQueryProfile().pinned_uploads;
+  };
+  EXPECT_EQ(uploads("first build"), 1);
+  const void* buffer = cloth.mesh().vertices.data();
+  EXPECT_EQ(cloth.hostPin().at(), buffer);
+  EXPECT_TRUE(cloth.hostPin().pinned());
+  for (double t : {0.4, 0.6, 0.8}) {
+    cloth.updateVertices(frame(t).vertices);
+    EXPECT_EQ(uploads("t = " + std::to_string(t)), 1);
+    EXPECT_EQ(cloth.mesh().vertices.data(), buffer);
+  }
+  EXPECT_FALSE(sphere.hostPin().pinned());
+  {
+    kdet_test::ScopedEnv off("KDET_FCL_CUDA_PIN_VERTICES", "0");
+    cloth.updateVertices(frame(0.9).vertices);
+    EXPECT_EQ(uploads("staged"), 0);
+  }
+  cloth.setMesh(frame(1.0));  // a new buffer
+  EXPECT_EQ(cloth.hostPin().at(), nullptr);
+  EXPECT_EQ(uploads("after setMesh"), 1);
+  EXPECT_EQ(cloth.hostPin().at(), cloth.mesh().vertices.data());
+  for (int k = 0; k < 3; ++k) {  // new meshes of the same size, each registered afresh
+    HashedMesh<float> again(frame(0.5));
+    expectSameSelf(again, "new mesh " + std::to_string(k));
+    EXPECT_EQ(cuda::lastQueryProfile().pinned_uploads, 1) << k;
+  }
+  HashedMesh<float> other(frame(0.55));
+  const AllPairsResult cpu = intersectAll(cloth, other, on(Backend::Cpu));
+  const AllPairsResult gpu = intersectAll(cloth, other, on(Backend::Cuda));
+  EXPECT_EQ(gpu.self_a.pairs, sorted(cpu.self_a.pairs));
+  EXPECT_EQ(gpu.self_b.pairs, sorted(cpu.self_b.pairs));
+  EXPECT_EQ(gpu.inter.pairs, sorted(cpu.inter.pairs));
+  if (cuda::lastQueryProfile().joint) EXPECT_EQ(cuda::lastQueryProfile().pinned_uploads, 2);
+  cuda::setProfiling(false);
 }
 
 TEST(CudaQuery, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {

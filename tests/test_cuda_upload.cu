@@ -2,15 +2,19 @@
 // Upload: every byte arrives, nothing beyond the range is written, whatever the number of host
 // threads and the chunk size. Download: every element arrives, in order, in whole-element chunks,
 // and a throwing consumer leaves cleanly. The knobs are parsed and bounded, and a value out of
-// bounds throws. The copy tests skip without a device; the knob and empty-range tests need none.
+// bounds throws. Pinned uploads (a registered range's whole pages by DMA, its ends staged) bring
+// every byte too. The copy tests skip without a device; the knob, page and empty-range tests need
+// none.
 
 #include <cuda_runtime.h>
+#include <unistd.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -81,6 +85,88 @@ TEST(StagedUpload, EveryByteArrivesAndNothingBeyondForAnyThreadsAndChunks) {
 TEST(StagedUpload, ZeroBytesTouchNothing) {
   // No CUDA call is made for an empty range, so this holds with or without a device.
   EXPECT_EQ(stagedUpload(nullptr, nullptr, 0, nullptr, nullptr), cudaSuccess);
+}
+
+// The whole pages inside a range (staging::pageInterior), which pinHostMemory registers: page
+// aligned, inside the range, and every whole page of it. Needs no device.
+TEST(PinnedUpload, ThePageInteriorIsEveryWholePageInside) {
+  const std::uintptr_t page = std::uintptr_t(sysconf(_SC_PAGESIZE));
+  ASSERT_GT(page, 0u);
+  const std::uintptr_t base = 1000 * page;  // addresses only, never dereferenced
+  std::size_t with_pages = 0;
+  for (std::uintptr_t off : {std::uintptr_t(0), std::uintptr_t(1), page - 1, page, page + 3})
+    for (std::size_t bytes : {std::size_t(0), std::size_t(1), std::size_t(page - 1),
+                              std::size_t(page), std::size_t(page + 1), std::size_t(2 * page),
+                              std::size_t(3 * page - 2), std::size_t(1) << 20}) {
+      const std::uintptr_t a = base + off;
+      const kdet_fcl::staging::PageInterior in =
+          kdet_fcl::staging::pageInterior(reinterpret_cast<const void*>(a), bytes);
+      const std::string what = "offset " + std::to_string(off) + ", bytes " + std::to_string(bytes);
+      ASSERT_LE(in.begin, in.end) << what;
+      ASSERT_LE(in.end, bytes) << what;
+      // The first whole page starting at or after a, the last whole page ending at or before the
+      // end: none when they do not meet.
+      const std::uintptr_t lo = (a + page - 1) / page * page, hi = (a + bytes) / page * page;
+      if (hi <= lo) {
+        EXPECT_EQ(in.begin, in.end) << what;
+      } else {
+        ++with_pages;
+        EXPECT_EQ(a + in.begin, lo) << what;
+        EXPECT_EQ(a + in.end, hi) << what;
+        EXPECT_EQ((in.end - in.begin) % page, 0u) << what;
+      }
+    }
+  EXPECT_GT(with_pages, 10u);
+}
+
+// pinnedUpload: every byte arrives, nothing beyond, for ranges at every kind of offset from a
+// page and of every size around a page; a range registered once cannot be registered again
+// until its registration is dropped (so a leaked registration would show).
+TEST(PinnedUpload, EveryByteArrivesFromARegisteredRange) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  constexpr std::size_t kGuard = 256;
+  const std::size_t page = std::size_t(sysconf(_SC_PAGESIZE));
+  const std::size_t max_bytes = (std::size_t(3) << 20) + 7;
+  std::vector<unsigned char> src(max_bytes + 2 * page);
+  std::mt19937 rng(13);
+  for (auto& b : src) b = static_cast<unsigned char>(rng());
+  unsigned char* dev = nullptr;
+  ASSERT_EQ(cudaMalloc(&dev, max_bytes + kGuard), cudaSuccess);
+  void* stage = nullptr;
+  ASSERT_EQ(cudaMallocHost(&stage, max_bytes), cudaSuccess);
+  cudaStream_t s = nullptr;
+  ASSERT_EQ(cudaStreamCreate(&s), cudaSuccess);
+  std::vector<unsigned char> back(max_bytes + kGuard);
+  int registered = 0;
+  for (std::size_t off : {std::size_t(0), std::size_t(1), page - 1, page, page + 5})
+    for (std::size_t bytes : {std::size_t(1), page - 1, page, page + 1, 3 * page - 2,
+                              std::size_t(1) << 20, max_bytes}) {
+      const std::string what = "offset " + std::to_string(off) + ", bytes " + std::to_string(bytes);
+      const unsigned char* from = src.data() + off;
+      std::shared_ptr<void> pin = kdet_fcl::staging::pinHostMemory(from, bytes);
+      const kdet_fcl::staging::PageInterior in = kdet_fcl::staging::pageInterior(from, bytes);
+      EXPECT_EQ(pin != nullptr, in.end > in.begin) << what;
+      if (pin) {
+        ++registered;
+        EXPECT_EQ(kdet_fcl::staging::pinHostMemory(from, bytes), nullptr) << what << ": twice";
+      }
+      ASSERT_EQ(cudaMemset(dev, 0xAB, max_bytes + kGuard), cudaSuccess);
+      ASSERT_EQ(kdet_fcl::staging::pinnedUpload(dev, from, bytes, stage, s), cudaSuccess) << what;
+      ASSERT_EQ(cudaStreamSynchronize(s), cudaSuccess);
+      ASSERT_EQ(cudaMemcpy(back.data(), dev, bytes + kGuard, cudaMemcpyDeviceToHost), cudaSuccess);
+      EXPECT_EQ(std::memcmp(back.data(), from, bytes), 0) << what;
+      std::size_t beyond = 0;
+      for (std::size_t i = bytes; i < bytes + kGuard; ++i) beyond += back[i] != 0xAB;
+      EXPECT_EQ(beyond, 0u) << what;
+      pin.reset();  // unregistered: the same range registers again
+      if (in.end > in.begin) {
+        EXPECT_NE(kdet_fcl::staging::pinHostMemory(from, bytes), nullptr) << what << ": again";
+      }
+    }
+  EXPECT_GT(registered, 10);
+  EXPECT_EQ(cudaStreamDestroy(s), cudaSuccess);
+  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
+  EXPECT_EQ(cudaFree(dev), cudaSuccess);
 }
 
 /// An 8-byte element, as a triangle pair.
