@@ -1364,7 +1364,8 @@ bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", t
 
 /// Copies one part's vertices to the device. From staging::kPinMinBytes up (unless
 /// KDET_FCL_CUDA_PIN_VERTICES=0) the mesh's vertex buffer is registered as page-locked memory
-/// once (its whole pages), the registration kept with the mesh (detail::HostPin, which the mesh
+/// on its second upload (its whole pages; a buffer uploaded once, as a new mesh per frame, never
+/// pays the registration), the registration kept with the mesh (detail::HostPin, which the mesh
 /// drops before that buffer can go; updateVertices writes into the same buffer), and every later
 /// upload of it is one DMA from it, with no copy into the staging buffer but for the partial
 /// pages at its ends (staging::pinnedUpload). A buffer that cannot be registered is
@@ -1377,7 +1378,11 @@ bool uploadVertices(Context& ctx, Vec3<S>* dst, const HashedMesh<S>* owner,
   const void* src = part.vertices.data();
   if (owner != nullptr && bytes >= staging::kPinMinBytes && staging::pinVerticesOn()) {
     detail::HostPin& pin = owner->hostPin();
-    if (pin.at() != src) pin.set(src, staging::pinHostMemory(src, bytes));
+    if (pin.at() != src) {
+      pin.see(src);  // a first upload is staged: a buffer uploaded once is never registered
+    } else if (!pin.tried()) {
+      pin.set(src, staging::pinHostMemory(src, bytes));
+    }
     if (pin.pinned()) {
       CUDA_TRY(staging::pinnedUpload(dst, src, bytes, stage, ctx.stream));
       return true;
@@ -2631,9 +2636,13 @@ auto guarded(F&& f) -> decltype(f(std::declval<Context&>())) {
     evict<double>(ctx);
     return r;
   } catch (const CudaError&) {
+    // Nothing enqueued may still read a host buffer once the query has thrown (a vertex upload
+    // from a mesh's own pinned buffer, or from the stage).
+    (void)cudaStreamSynchronize(ctx.stream);
     ctx.releaseAll();
     throw;
   } catch (...) {
+    (void)cudaStreamSynchronize(ctx.stream);
     // A non-CUDA failure (bad input, bad_alloc) may have left a half-built entry: drop those.
     ctx.meshes_f.remove_if([](const CachedMesh<float>& m) { return !m.valid; });
     ctx.meshes_d.remove_if([](const CachedMesh<double>& m) { return !m.valid; });

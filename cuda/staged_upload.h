@@ -121,7 +121,21 @@ inline std::shared_ptr<void> pinHostMemory(const void* src, std::size_t bytes) {
     (void)cudaGetLastError();
     return nullptr;
   }
-  return std::shared_ptr<void>(p, [](void* q) { (void)cudaHostUnregister(q); });
+  int device = 0;
+  if (cudaGetDevice(&device) != cudaSuccess) {
+    (void)cudaGetLastError();
+    device = 0;
+  }
+  // Unregistered in the device's context it was registered in, whatever the calling thread's
+  // current device; an error there is cleared, so that it never reaches a later check.
+  return std::shared_ptr<void>(p, [device](void* q) {
+    int current = device;
+    if (cudaGetDevice(&current) != cudaSuccess) current = device;
+    if (current != device) (void)cudaSetDevice(device);
+    (void)cudaHostUnregister(q);
+    if (current != device) (void)cudaSetDevice(current);
+    (void)cudaGetLastError();
+  });
 }
 
 /// Copies `bytes` from `src`, whose whole pages pinHostMemory registered, to device memory

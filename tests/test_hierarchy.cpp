@@ -375,9 +375,15 @@ TEST(HashedMesh, AVertexBufferRegistrationLivesExactlyAsLongAsTheBuffer) {
     EXPECT_EQ(released, 2);
     EXPECT_EQ(k.hostPin().at(), k.mesh().vertices.data());
     EXPECT_TRUE(k.hostPin().pinned());
-    // A failed registration is a record without a handle: nothing to release.
+    // A first upload is a record without a registration; a failed registration is a tried
+    // record without a handle: nothing to release for either.
     HashedMesh<double> f(sphere);
+    f.hostPin().see(f.mesh().vertices.data());
+    EXPECT_EQ(f.hostPin().at(), f.mesh().vertices.data());
+    EXPECT_FALSE(f.hostPin().tried());
+    EXPECT_FALSE(f.hostPin().pinned());
     f.hostPin().set(f.mesh().vertices.data(), nullptr);
+    EXPECT_TRUE(f.hostPin().tried());
     EXPECT_FALSE(f.hostPin().pinned());
     EXPECT_EQ(f.hostPin().at(), f.mesh().vertices.data());
   }  // k's destructor drops the last registration before its buffer goes
