@@ -1239,6 +1239,7 @@ class PinnedBuffer {
 template <class S>
 struct MeshSource {
   const TriangleMesh<S>* part[2] = {nullptr, nullptr};
+  const HashedMesh<S>* owner[2] = {nullptr, nullptr};  // whose mesh() each part is
   std::size_t nv() const {
     return (part[0] ? part[0]->vertices.size() : 0) + (part[1] ? part[1]->vertices.size() : 0);
   }
@@ -1247,10 +1248,12 @@ struct MeshSource {
   }
 };
 template <class S>
-MeshSource<S> sourceOf(const TriangleMesh<S>* first, const TriangleMesh<S>* second = nullptr) {
+MeshSource<S> sourceOf(const HashedMesh<S>* first, const HashedMesh<S>* second = nullptr) {
   MeshSource<S> src;
-  src.part[0] = first;
-  src.part[1] = second;
+  src.owner[0] = first;
+  src.owner[1] = second;
+  src.part[0] = first ? &first->mesh() : nullptr;
+  src.part[1] = second ? &second->mesh() : nullptr;
   return src;
 }
 
@@ -1510,6 +1513,36 @@ bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", t
 /// Whether a re-hash without read-back may group its entries by counting instead of sorting them
 /// (countFillKernel); KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort (read at every build).
 bool countBuildOn() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", true); }
+
+/// Copies one part's vertices to the device. From staging::kPinMinBytes up (unless
+/// KDET_FCL_CUDA_PIN_VERTICES=0) the mesh's vertex buffer is registered as page-locked memory
+/// on its second upload (its whole pages; a buffer uploaded once, as a new mesh per frame, never
+/// pays the registration), the registration kept with the mesh (detail::HostPin, which the mesh
+/// drops before that buffer can go; updateVertices writes into the same buffer), and every later
+/// upload of it is one DMA from it, with no copy into the staging buffer but for the partial
+/// pages at its ends (staging::pinnedUpload). A buffer that cannot be registered is
+/// recorded as such and takes the staged path from then on. Returns whether the DMA path ran.
+/// (The query synchronises its stream before it returns, so the buffer is not read after.)
+template <class S>
+bool uploadVertices(Context& ctx, Vec3<S>* dst, const HashedMesh<S>* owner,
+                    const TriangleMesh<S>& part, char* stage) {
+  const std::size_t bytes = part.vertices.size() * sizeof(Vec3<S>);
+  const void* src = part.vertices.data();
+  if (owner != nullptr && bytes >= staging::kPinMinBytes && staging::pinVerticesOn()) {
+    detail::HostPin& pin = owner->hostPin();
+    if (pin.at() != src) {
+      pin.see(src);  // a first upload is staged: a buffer uploaded once is never registered
+    } else if (!pin.tried()) {
+      pin.set(src, staging::pinHostMemory(src, bytes));
+    }
+    if (pin.pinned()) {
+      CUDA_TRY(staging::pinnedUpload(dst, src, bytes, stage, ctx.stream));
+      return true;
+    }
+  }
+  CUDA_TRY(staging::stagedUpload(dst, src, bytes, stage, ctx.stream));
+  return false;
+}
 
 /// Whether a build of `m` records, per triangle, the levels above its own that hold a cell of its
 /// range (upperLevelsKernel): KDET_FCL_CUDA_UPPER_LEVELS = 0 (never), 1 (always), unset (while
@@ -1937,11 +1970,13 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upl
   // Each part's vertices (and triangles) go to their place in the arrays, through their own part
   // of the stage; the second part's vertex indices are then shifted past the first's vertices.
   std::size_t v_at = 0, t_at = 0;
-  for (const TriangleMesh<S>* part : mesh.part) {
+  for (int k = 0; k < 2; ++k) {
+    const TriangleMesh<S>* part = mesh.part[k];
     if (part == nullptr) continue;
     const std::size_t pv = part->vertices.size(), pt = part->triangles.size();
-    CUDA_TRY(staging::stagedUpload(m.v.data() + v_at, part->vertices.data(), pv * sizeof(Vec3<S>),
-                                   stage + v_at * sizeof(Vec3<S>), s));
+    if (uploadVertices(ctx, m.v.data() + v_at, mesh.owner[k], *part,
+                       stage + v_at * sizeof(Vec3<S>)))
+      ++ctx.profile.pinned_uploads;
     if (upload_tris) {
       CUDA_TRY(staging::stagedUpload(m.t.data() + 3 * t_at, part->triangles.data(),
                                      pt * sizeof(Triangle),
@@ -2004,7 +2039,7 @@ bool checkPending(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh,
 template <class S>
 CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm, const HashedMesh<S>* hm2 = nullptr) {
   auto& list = ctx.meshes(static_cast<S*>(nullptr));
-  const MeshSource<S> src = sourceOf(&hm.mesh(), hm2 ? &hm2->mesh() : nullptr);
+  const MeshSource<S> src = sourceOf(&hm, hm2);
   std::uint64_t fp = fingerprintOf(hm.mesh());
   if (hm2) fp = fp * 1099511628211ull ^ fingerprintOf(hm2->mesh());
   const std::uint64_t v2 = hm2 ? hm2->version() : 0;
@@ -2627,7 +2662,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     return filter;
   };
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
-                           {sourceOf(&a.mesh()), sourceOf(&b.mesh())}};
+                           {sourceOf(&a), sourceOf(&b)}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,
                              std::max(A.inter_density, B.inter_density), 0.0, false, options);
   A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
@@ -2732,7 +2767,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
     ctx.profile.pairs = kept.pairs.size();
     return kept;
   }
-  QueryResult res = selfQuery(ctx, M, sourceOf(&mesh.mesh()), 0, nullptr, options);
+  QueryResult res = selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options);
   M.kept_self.offer(ticket, options, res);
   return res;
 }
@@ -2747,7 +2782,7 @@ AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<
   ctx.record(0);
   CachedMesh<S>& M = acquire(ctx, a, &b);
   QueryResult parts[3];
-  selfQuery(ctx, M, sourceOf(&a.mesh(), &b.mesh()), static_cast<std::uint32_t>(a.numTriangles()),
+  selfQuery(ctx, M, sourceOf(&a, &b), static_cast<std::uint32_t>(a.numTriangles()),
             parts, options);
   ctx.profile.joint = true;
   r.self_a = std::move(parts[0]);
@@ -2773,6 +2808,7 @@ void readEveryKnob() {
   (void)rehashCap(1);
   (void)rehashGraphOn();
   (void)countBuildOn();
+  (void)staging::pinVerticesOn();
   (void)upperLevelsFor(0);
   (void)capacityKnob();
   (void)planeFilterOn();
@@ -2808,9 +2844,13 @@ auto guarded(F&& f) -> decltype(f(std::declval<Context&>())) {
     evict<double>(ctx);
     return r;
   } catch (const CudaError&) {
+    // Nothing enqueued may still read a host buffer once the query has thrown (a vertex upload
+    // from a mesh's own pinned buffer, or from the stage).
+    (void)cudaStreamSynchronize(ctx.stream);
     ctx.releaseAll();
     throw;
   } catch (...) {
+    (void)cudaStreamSynchronize(ctx.stream);
     // A non-CUDA failure (bad input, bad_alloc) may have left a half-built entry: drop those.
     ctx.meshes_f.remove_if([](const CachedMesh<float>& m) { return !m.valid; });
     ctx.meshes_d.remove_if([](const CachedMesh<double>& m) { return !m.valid; });

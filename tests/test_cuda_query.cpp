@@ -105,6 +105,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_FULL_KEYS", on_off, not_on_off},
       {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_BUILD", on_off, not_on_off},
+      {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
@@ -320,6 +321,79 @@ TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
   cloth.setMesh(shuffled);
   expectSameInter(cloth, sphere, "shuffled triangles");
   expectSameSelf(cloth, "shuffled self");
+}
+
+// Vertex arrays of 1 MiB and up are registered as page-locked memory on their second upload and
+// then copied straight from the mesh's buffer (QueryProfile::pinned_uploads; a re-hash that
+// falls back uploads again), frame after frame, as long as the buffer stays (updateVertices
+// keeps it). A new buffer (setMesh) starts over; a mesh's registration goes with it (new meshes,
+// perhaps at the same address, register again: a leaked registration would refuse them); both
+// parts of a joint query are handled; small arrays and KDET_FCL_CUDA_PIN_VERTICES=0 are staged.
+// Every answer equals the CPU's.
+TEST(CudaQuery, LargeVertexArraysAreCopiedStraightFromTheirRegisteredBuffer) {
+  KDET_SKIP_WITHOUT_DEVICE();
+  kdet_test::ScopedEnv pin_default("KDET_FCL_CUDA_PIN_VERTICES", nullptr);
+  cuda::setProfiling(true);
+  const int n = 320;  // 321^2 float vertices: 1.24 MB
+  auto frame = [&](double t) { return makeDrapedCloth<float>(n, 4.0f, 1.0f, 0.03f, float(t)); };
+  ASSERT_GE(frame(0).vertices.size() * sizeof(Vec3<float>), std::size_t(1) << 20);
+  HashedMesh<float> sphere(makeSphere<float>({0, 0, 0}, 1.0f, 32, 16));  // small: staged
+  HashedMesh<float> cloth(frame(0.2));
+  // Pinned uploads of the last query, less the re-uploads of its fallbacks.
+  auto pinned = [&]() {
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    return p.pinned_uploads > 0 ? p.pinned_uploads - p.rehash_fallbacks : 0;
+  };
+  auto inter = [&](const std::string& what) {
+    expectSameInter(cloth, sphere, what);
+    return pinned();
+  };
+  EXPECT_EQ(inter("first build"), 0);  // a first upload is staged
+  const void* buffer = cloth.mesh().vertices.data();
+  EXPECT_EQ(cloth.hostPin().at(), buffer);
+  EXPECT_FALSE(cloth.hostPin().tried());
+  for (double t : {0.4, 0.6, 0.8}) {
+    cloth.updateVertices(frame(t).vertices);
+    const int p = inter("t = " + std::to_string(t));
+    if (t == 0.4 && cloth.hostPin().tried() && !cloth.hostPin().pinned())
+      GTEST_SKIP() << "this machine refused to register host memory (cudaHostRegister)";
+    EXPECT_EQ(p, 1);
+    EXPECT_EQ(cloth.mesh().vertices.data(), buffer);
+    EXPECT_TRUE(cloth.hostPin().pinned());
+  }
+  EXPECT_EQ(sphere.hostPin().at(), nullptr);  // small: never recorded
+  {
+    kdet_test::ScopedEnv off("KDET_FCL_CUDA_PIN_VERTICES", "0");
+    cloth.updateVertices(frame(0.9).vertices);
+    EXPECT_EQ(inter("staged"), 0);
+  }
+  cloth.setMesh(frame(1.0));  // a new buffer
+  EXPECT_EQ(cloth.hostPin().at(), nullptr);
+  EXPECT_EQ(inter("after setMesh"), 0);
+  cloth.updateVertices(frame(0.3).vertices);
+  EXPECT_EQ(inter("after setMesh, second upload"), 1);
+  EXPECT_EQ(cloth.hostPin().at(), cloth.mesh().vertices.data());
+  for (int k = 0; k < 3; ++k) {  // new meshes of the same size, each registered afresh
+    HashedMesh<float> again(frame(0.5));
+    expectSameSelf(again, "new mesh " + std::to_string(k));
+    EXPECT_EQ(pinned(), 0) << k;
+    cuda::markDeformed(again);
+    expectSameSelf(again, "new mesh, second upload " + std::to_string(k));
+    EXPECT_EQ(pinned(), 1) << k;
+    EXPECT_TRUE(again.hostPin().pinned()) << k;
+  }
+  HashedMesh<float> other(frame(0.55));
+  for (int round = 0; round < 2; ++round) {
+    if (round == 1) other.updateVertices(frame(0.65).vertices);
+    const AllPairsResult cpu = intersectAll(cloth, other, on(Backend::Cpu));
+    const AllPairsResult gpu = intersectAll(cloth, other, on(Backend::Cuda));
+    EXPECT_EQ(gpu.self_a.pairs, sorted(cpu.self_a.pairs)) << round;
+    EXPECT_EQ(gpu.self_b.pairs, sorted(cpu.self_b.pairs)) << round;
+    EXPECT_EQ(gpu.inter.pairs, sorted(cpu.inter.pairs)) << round;
+    // The cloth's buffer is registered already; the other's on its second upload.
+    if (cuda::lastQueryProfile().joint) EXPECT_EQ(pinned(), round == 0 ? 1 : 2) << round;
+  }
+  cuda::setProfiling(false);
 }
 
 TEST(CudaQuery, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
