@@ -427,7 +427,8 @@ __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restr
 // finds them: a key claims the slot of its probe sequence, as a lookup walks it. The order of
 // the cells, and of the entries inside a cell, follows the atomics and changes from run to run;
 // the cells, their entries and every candidate and pair are the same as the sort's (the output
-// is sorted). KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort.
+// is sorted). Meshes of more than kCountBuildMaxTriangles keep the sort (KDET_FCL_CUDA_COUNT_BUILD
+// forces either).
 
 /// Empties the table and zeroes the per-slot counts and the per-cell counts [0, cells_n).
 __global__ void countClearKernel(unsigned long long* __restrict__ slots, std::uint32_t slot_count,
@@ -1510,9 +1511,18 @@ std::uint32_t rehashCap(std::uint32_t cap) {
 /// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
 bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", true); }
 
-/// Whether a re-hash without read-back may group its entries by counting instead of sorting them
-/// (countFillKernel); KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort (read at every build).
-bool countBuildOn() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", true); }
+/// Triangles up to which a re-hash without read-back groups its entries by counting. H100, the
+/// counting build against the sort (gpu_bench, same run): the UNC cloth ball (92k) 0.15 against
+/// 0.20-0.24 ms of build; the 1M cloth 0.70 against 0.54 ms, the 10M cloth 8.1 against 5.8 ms
+/// (the table and its atomics leave the L2 cache; see benchmarks/RESULTS-gpu.md).
+constexpr std::size_t kCountBuildMaxTriangles = 150000;
+
+/// Whether a re-hash without read-back of `nt` triangles groups its entries by counting instead
+/// of sorting them (countFillKernel): KDET_FCL_CUDA_COUNT_BUILD = 0 (never), 1 (always), unset
+/// (up to kCountBuildMaxTriangles). Read at every build.
+bool countBuildOn(std::size_t nt) {
+  return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", nt <= kCountBuildMaxTriangles);
+}
 
 /// Copies one part's vertices to the device. From staging::kPinMinBytes up (unless
 /// KDET_FCL_CUDA_PIN_VERTICES=0) the mesh's vertex buffer is registered as page-locked memory
@@ -1595,7 +1605,7 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   // A re-hash without read-back whose cells need no size order groups its entries by counting
   // (countFillKernel), not by a sort; its compact keys then need only fit in 64 bits, not in the
   // sort's bits.
-  const bool count_build = async && !m.size_ordered && countBuildOn();
+  const bool count_build = async && !m.size_ordered && countBuildOn(nt);
   m.count_build = count_build;
   if (count_build) ++ctx.profile.count_builds;
   gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? (count_build ? 64 : m.sort_bits) : 0);
@@ -1864,7 +1874,7 @@ void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     need = std::max(need, b);
     CUDA_TRY(cub::DeviceScan::ExclusiveSum(nullptr, b, p, p, static_cast<int>(cap), s));
     need = std::max(need, b);
-    if (countBuildOn() && !m.size_ordered) {  // the counting build's scratch and scan
+    if (countBuildOn(nt) && !m.size_ordered) {  // the counting build's scratch and scan
       const std::uint32_t cell_cap = rehashCap(m.cell_cap);
       auto words = [](std::size_t k) { return ((k + 1) / 2 + 31) & ~std::size_t(31); };
       ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + words(m.slot_count) +
@@ -1887,7 +1897,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   const std::uint32_t cap = rehashCap(m.entry_cap), cell_cap = rehashCap(m.cell_cap);
   const std::vector<std::uintptr_t> key = {
       nt, cap, cell_cap, m.slot_count, std::uintptr_t(m.sort_bits), std::uintptr_t(g_num_sms),
-      std::uintptr_t(m.size_ordered), std::uintptr_t(countBuildOn()),
+      std::uintptr_t(m.size_ordered), std::uintptr_t(countBuildOn(nt)),
       std::uintptr_t(ctx.red_ready), std::uintptr_t(upperLevelsFor(m.self_density)),
       reinterpret_cast<std::uintptr_t>(m.upper.data()),
       reinterpret_cast<std::uintptr_t>(m.v.data()), reinterpret_cast<std::uintptr_t>(m.t.data()),
@@ -1931,7 +1941,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     m.pending_entry_cap = cap;
     m.pending_cell_cap = cell_cap;
     ++ctx.profile.rehashes_async;
-    m.count_build = !m.size_ordered && countBuildOn();  // as captured (the graph's key)
+    m.count_build = !m.size_ordered && countBuildOn(nt);  // as captured (the graph's key)
     if (m.count_build) ++ctx.profile.count_builds;
   }
   ++ctx.profile.rehash_graphs;
@@ -2807,7 +2817,7 @@ void readEveryKnob() {
   (void)fullKeys();
   (void)rehashCap(1);
   (void)rehashGraphOn();
-  (void)countBuildOn();
+  (void)countBuildOn(0);
   (void)staging::pinVerticesOn();
   (void)upperLevelsFor(0);
   (void)capacityKnob();

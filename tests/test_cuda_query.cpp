@@ -1350,9 +1350,10 @@ TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
 }
 
 TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
-  // A re-hash without read-back of a mesh whose cells need no size order (the warp scan, the
-  // default) groups its entries by counting them in the cell table (countFillKernel) instead of
-  // sorting them; KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort. The order of the cells, and of the
+  // A re-hash without read-back of a mesh of up to 150k triangles whose cells need no size order
+  // (the warp scan, the default) groups its entries by counting them in the cell table
+  // (countFillKernel) instead of sorting them; KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort, 1
+  // counts at any size. The order of the cells, and of the
   // entries inside a cell, then follows the atomics, but the candidates and the pairs must be
   // the sort's and the CPU's at every frame: self queries (with the cells' pairs on and off),
   // inter queries both ways and the joint query, on a deforming cloth over a sphere, a crowded
@@ -1412,7 +1413,7 @@ TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
         const std::string w = std::string(what) + ", " + at + ", self cells " + cells;
         Run by_count, by_sort;
         {
-          kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", nullptr);  // the default
+          kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", nullptr);  // (small: counts)
           by_count = self(*m);
         }
         {
@@ -1475,6 +1476,30 @@ TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
       EXPECT_EQ(r.profile.rehash_fallbacks, 1) << w;
       EXPECT_EQ(r.pairs, sorted(intersectSelf(*m).pairs)) << w;
     }
+  }
+  {
+    // Above 150k triangles the default is the sort (the counting build is slower there); the
+    // knob forces the count, with the same candidates and pairs. The sphere (small) counts.
+    HashedMesh<S> big(makeDrapedCloth<S>(280, 4, 1, S(0.03), S(1)));  // 156,800 triangles
+    const std::vector<TrianglePair> cpu = sorted(intersectMeshes(big, sphere).pairs);
+    inter(big, sphere);  // the first build, with read-backs
+    Run by_default, by_count;
+    {
+      kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", nullptr);
+      by_default = inter(big, sphere);
+    }
+    {
+      kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "1");
+      by_count = inter(big, sphere);
+    }
+    EXPECT_EQ(by_default.profile.rehashes_async, 2);
+    EXPECT_EQ(by_default.profile.count_builds, 1);  // the sphere's
+    EXPECT_EQ(by_count.profile.rehashes_async, 2);
+    EXPECT_EQ(by_count.profile.count_builds, 2);
+    EXPECT_GT(cpu.size(), 100u);
+    EXPECT_EQ(by_default.pairs, cpu);
+    EXPECT_EQ(by_count.pairs, cpu);
+    EXPECT_EQ(by_count.candidates, by_default.candidates);
   }
   cuda::setProfiling(false);
 #endif
