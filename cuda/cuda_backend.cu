@@ -416,6 +416,16 @@ __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restr
   while (atomicCAS(&slots[s], kEmptySlot, val) != kEmptySlot) s = s + 1 == slot_count ? 0u : s + 1;
 }
 
+/// Adds one per thread of `g` (threads calling together) to *counter with a single atomic, and
+/// returns each thread's own old value: distinct values, as a per-thread atomicAdd(counter, 1)
+/// would give (in another order), with 1/g.size() of the atomics on one address.
+template <class T, class Group>
+__device__ __forceinline__ T groupIncrement(T* counter, const Group& g) {
+  T base = 0;
+  if (g.thread_rank() == 0) base = atomicAdd(counter, static_cast<T>(g.size()));
+  return g.shfl(base, 0) + static_cast<T>(g.thread_rank());
+}
+
 // ---- The counting build: the cells of a re-hash without a sort ------------------------------
 // A re-hash without read-back (compact keys, cells not laid out by size) can group its entries
 // by cell with the mesh's own lookup table instead of a radix sort of the entries: each entry
@@ -481,7 +491,10 @@ __global__ void __launch_bounds__(kBuildBlock)
             if (cur == kEmptySlot) {
               cur = atomicCAS(slots + s, kEmptySlot, key);
               if (cur == kEmptySlot) {  // claimed: a new cell
-                if (atomicAdd(&info->inserted, 1u) >= cell_cap) *sync_flag = 1;
+                // (one atomic per group of threads inserting together: ncu, H100, 1M cloth,
+                // the kernel took 357 us with one per insert)
+                if (groupIncrement(&info->inserted, cg::coalesced_threads()) >= cell_cap)
+                  *sync_flag = 1;
                 found = true;
                 break;
               }
@@ -500,7 +513,9 @@ __global__ void __launch_bounds__(kBuildBlock)
         const std::uint32_t first =
             (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u);
         ent_slot[e] = s;
-        ent_rank[e] = atomicAdd(slot_cnt + s, 1u);
+        // The threads of a warp counting in the same slot take one atomic together.
+        ent_rank[e] =
+            groupIncrement(slot_cnt + s, cg::labeled_partition(cg::coalesced_threads(), s));
         ent_val[e] = entryValue(i, first);
       }
 }
@@ -523,7 +538,7 @@ __global__ void countCellsKernel(BuildInfo* info, unsigned long long* slots,
   }
   const unsigned long long key = slots[s];
   if (key == kEmptySlot) return;
-  const std::uint32_t c = atomicAdd(&info->cells, 1u);
+  const std::uint32_t c = groupIncrement(&info->cells, cg::coalesced_threads());
   if (c >= cell_cap) {
     slot_words[s] = ~0u;
     slots[s] = kEmptySlot;
@@ -633,11 +648,7 @@ struct PairSink {
 
 __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, std::uint32_t b) {
   // One atomic per group of threads emitting together (they are usually a warp's worth).
-  cg::coalesced_group g = cg::coalesced_threads();
-  unsigned long long base = 0;
-  if (g.thread_rank() == 0) base = atomicAdd(out.count, static_cast<unsigned long long>(g.size()));
-  base = g.shfl(base, 0);
-  const unsigned long long idx = base + g.thread_rank();
+  const unsigned long long idx = groupIncrement(out.count, cg::coalesced_threads());
   if (idx < out.capacity)
     out.pairs[idx] = (static_cast<unsigned long long>(a) << out.b_bits) | b;
 }
