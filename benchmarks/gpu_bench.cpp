@@ -273,14 +273,16 @@ Row runScene(const BScene& sc, const Config& cfg) {
 
   // LBVH GPU: one tree per object, built at frame 0, refit (or rebuilt) per frame; in the joint
   // form one tree over both objects (their joint meshes, one per frame, made here).
-  std::vector<std::unique_ptr<kdet_bvh::GpuBvh<float>>> bv(joint ? 1 : nobj);
+  // (joint_frames before bv: the trees, which may hold registrations of these arrays, go first.)
   std::vector<TriangleMesh<float>> joint_frames;
+  std::vector<std::unique_ptr<kdet_bvh::GpuBvh<float>>> bv(joint ? 1 : nobj);
   const auto split = static_cast<std::uint32_t>(sc.mesh(0, 0).numTriangles());
   if (joint)
     for (int f = 0; f < F; ++f)
       joint_frames.push_back(kdet_bvh::jointMesh(sc.mesh(0, f), sc.mesh(1, f)));
   for (std::size_t o = 0; o < bv.size(); ++o) {
     bv[o] = std::make_unique<kdet_bvh::GpuBvh<float>>();
+    bv[o]->setStableSources(true);  // the frames' meshes live through the scene
     bv[o]->setMesh(joint ? joint_frames[0] : sc.mesh(int(o), 0));
   }
   auto bvhFrame = [&](int f, bool rebuild, std::vector<Pairs>* sets) {

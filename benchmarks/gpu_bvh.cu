@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <map>
+#include <memory>
 #include <cstring>
 #include <cub/device/device_radix_sort.cuh>
 #include <stdexcept>
@@ -540,15 +542,38 @@ struct GpuBvh<S>::Impl {
   /// an event after its last transfer, which the next upload waits for before it rewrites it.
   Pinned staging;
   cudaEvent_t staged = nullptr;
+  /// setStableSources: the caller's vertex arrays, registered as page-locked memory on their
+  /// first upload (nullptr: refused), dropped with this tree after its last transfer.
+  bool stable_sources = false;
+  std::map<const void*, std::shared_ptr<void>> pins;
   ~Impl() {
-    if (staged != nullptr) (void)cudaEventDestroy(staged);
+    if (staged != nullptr) {
+      (void)cudaEventSynchronize(staged);  // no transfer from a registered array in flight
+      (void)cudaEventDestroy(staged);
+    }
+    pins.clear();
   }
-  /// The same staged, multi-threaded copy as the kDet backend (cuda/staged_upload.h).
+  /// The same copy as the kDet backend (cuda/staged_upload.h): staged by several threads, or,
+  /// for arrays of staging::kPinMinBytes and up that the caller declared stable, one DMA from the
+  /// array itself, registered once (the kDet backend registers its meshes' own buffers so).
   void upload(const std::vector<Vec3<S>>& vertices) {
     if (vertices.size() != nv) throw std::invalid_argument("gpu_bvh: vertex count changed");
     const std::size_t bytes = vertices.size() * sizeof(Vec3<S>);
     if (staged == nullptr) BVH_TRY(cudaEventCreateWithFlags(&staged, cudaEventDisableTiming));
     BVH_TRY(cudaEventSynchronize(staged));
+    if (stable_sources && bytes >= kdet_fcl::staging::kPinMinBytes &&
+        kdet_fcl::staging::pinVerticesOn()) {
+      auto it = pins.find(vertices.data());
+      if (it == pins.end())
+        it = pins.emplace(vertices.data(),
+                          kdet_fcl::staging::pinHostMemory(vertices.data(), bytes)).first;
+      if (it->second != nullptr) {
+        BVH_TRY(kdet_fcl::staging::pinnedUpload(v.p, vertices.data(), bytes,
+                                                staging.reserve(bytes), 0));
+        BVH_TRY(cudaEventRecord(staged, 0));
+        return;
+      }
+    }
     void* h = staging.reserve(bytes);
     BVH_TRY(kdet_fcl::staging::stagedUpload(v.p, vertices.data(), bytes, h, 0));
     BVH_TRY(cudaEventRecord(staged, 0));
@@ -623,6 +648,11 @@ void GpuBvh<S>::setMesh(const kdet_fcl::TriangleMesh<S>& mesh) {
   g_timer.mark(&g_timer.t.build_ms);
   g_timer.end();
   BVH_TRY(cudaDeviceSynchronize());
+}
+
+template <class S>
+void GpuBvh<S>::setStableSources(bool on) {
+  impl_->stable_sources = on;
 }
 
 template <class S>

@@ -69,6 +69,12 @@ class GpuBvh {
 
   /// Uploads the mesh (topology + vertices) and builds its hierarchy.
   void setMesh(const kdet_fcl::TriangleMesh<S>& mesh);
+  /// The caller promises that every vertex array it passes to updateVertices/rebuildVertices
+  /// stays alive and unchanged while this tree lives (the benchmark's frame meshes do). Then
+  /// arrays of 1 MiB and up are registered as page-locked memory on their first upload and
+  /// copied to the device straight from there, as the kDet backend does with its meshes' own
+  /// buffers (KDET_FCL_CUDA_PIN_VERTICES=0: staged, for both). Off by default.
+  void setStableSources(bool on);
   /// New vertex positions (same count): uploads them and refits the tree (topology kept).
   void updateVertices(const std::vector<kdet_fcl::Vec3<S>>& vertices);
   /// New vertex positions: uploads them and rebuilds the tree from scratch (Morton sort).

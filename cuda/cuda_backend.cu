@@ -207,7 +207,7 @@ __global__ void gridKernel(BuildReduce* red, BuildInfo* info, int async_key_bits
   in.cells = 0;
   in.need_sync = async_key_bits > 0 &&
                  (!in.fits64 || in.level_bits + 3 * in.coord_bits > async_key_bits);
-  in.pad_ = 0;
+  in.inserted = 0;
   *info = in;
   for (int a = 0; a < 3; ++a) red->lo[a] = ~0ull, red->hi[a] = 0;
   red->dmin_pos = ~0ull;
@@ -416,6 +416,169 @@ __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restr
   while (atomicCAS(&slots[s], kEmptySlot, val) != kEmptySlot) s = s + 1 == slot_count ? 0u : s + 1;
 }
 
+/// Adds one per thread of `g` (threads calling together) to *counter with a single atomic, and
+/// returns each thread's own old value: distinct values, as a per-thread atomicAdd(counter, 1)
+/// would give (in another order), with 1/g.size() of the atomics on one address.
+template <class T, class Group>
+__device__ __forceinline__ T groupIncrement(T* counter, const Group& g) {
+  T base = 0;
+  if (g.thread_rank() == 0) base = atomicAdd(counter, static_cast<T>(g.size()));
+  return g.shfl(base, 0) + static_cast<T>(g.thread_rank());
+}
+
+// ---- The counting build: the cells of a re-hash without a sort ------------------------------
+// A re-hash without read-back (compact keys, cells not laid out by size) can group its entries
+// by cell with the mesh's own lookup table instead of a radix sort of the entries: each entry
+// finds or claims its cell's slot (countFillKernel), counts itself there and keeps its rank; the
+// claimed slots get cell indices and counts (countCellsKernel), a scan of the counts gives the
+// cells' first entries, and each entry goes to first + rank (scatterKernel). The slots first
+// hold the cells' compact keys (never kEmptySlot: a key of all ones is treated as overflow) and
+// are then rewritten in place to the lookup form ((hash >> 32) << 32 | cell), where findCell
+// finds them: a key claims the slot of its probe sequence, as a lookup walks it. The order of
+// the cells, and of the entries inside a cell, follows the atomics and changes from run to run;
+// the cells, their entries and every candidate and pair are the same as the sort's (the output
+// is sorted). Meshes of more than kCountBuildMaxTriangles keep the sort (KDET_FCL_CUDA_COUNT_BUILD
+// forces either).
+
+/// Empties the table and zeroes the per-slot counts and the per-cell counts [0, cells_n).
+__global__ void countClearKernel(unsigned long long* __restrict__ slots, std::uint32_t slot_count,
+                                 std::uint32_t* __restrict__ slot_cnt,
+                                 std::uint32_t* __restrict__ cell_count, std::uint32_t cells_n) {
+  const std::uint32_t stride = gridDim.x * blockDim.x;
+  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < slot_count; k += stride) {
+    slots[k] = kEmptySlot;
+    slot_cnt[k] = 0;
+  }
+  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < cells_n; k += stride)
+    cell_count[k] = 0;
+}
+
+/// fillKernel's entries (index order, no size sort), each counted in the slot of its cell's
+/// compact key (found, or claimed with atomicCAS along the probe sequence): per entry e < cap its
+/// slot, its rank among the slot's entries and its value (entryValue). More distinct cells than
+/// `cell_cap`, a probe past the whole table or a key of all ones set need_sync (the query then
+/// rebuilds with read-backs and reruns), and the thread stops.
+template <class S>
+__global__ void __launch_bounds__(kBuildBlock)
+    countFillKernel(std::uint32_t n, const Aabb<S>* __restrict__ box,
+                    const std::uint8_t* __restrict__ level, const std::uint32_t* __restrict__ offsets,
+                    BuildInfo* info, unsigned long long* slots, std::uint32_t slot_count,
+                    std::uint32_t* __restrict__ slot_cnt, std::uint32_t* __restrict__ ent_slot,
+                    std::uint32_t* __restrict__ ent_rank, std::uint32_t* __restrict__ ent_val,
+                    std::uint32_t cap, std::uint32_t cell_cap) {
+  const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i == 0) info->entries = offsets[n];
+  if (i >= n || info->need_sync) return;
+  const GridParams g = info->grid;
+  const int cb = info->coord_bits;
+  const int l = level[i];
+  const Aabb<double> bd = toDoubleBox(box[i]);
+  const detail::CellRange r = detail::cellRange(bd, l, g);
+  volatile int* const sync_flag = &info->need_sync;
+  std::uint32_t e = offsets[i];
+  for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
+    for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
+      for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z, ++e) {
+        if (e >= cap || *sync_flag) return;
+        const unsigned long long key = compactKey(l, x, y, z, cb);
+        const unsigned long long h = detail::hashCellKey(detail::makeCellKey(l, x, y, z));
+        std::uint32_t s = static_cast<std::uint32_t>(
+            (static_cast<unsigned long long>(static_cast<std::uint32_t>(h)) * slot_count) >> 32);
+        bool found = false;
+        if (key != kEmptySlot) {
+          for (std::uint32_t probe = 0; probe < slot_count; ++probe) {
+            unsigned long long cur = __ldcg(slots + s);
+            if (cur == kEmptySlot) {
+              cur = atomicCAS(slots + s, kEmptySlot, key);
+              if (cur == kEmptySlot) {  // claimed: a new cell
+                // (one atomic per group of threads inserting together: ncu, H100, 1M cloth,
+                // the kernel took 357 us with one per insert)
+                if (groupIncrement(&info->inserted, cg::coalesced_threads()) >= cell_cap)
+                  *sync_flag = 1;
+                found = true;
+                break;
+              }
+            }
+            if (cur == key) {
+              found = true;
+              break;
+            }
+            s = s + 1 == slot_count ? 0u : s + 1;
+          }
+        }
+        if (!found) {
+          *sync_flag = 1;
+          return;
+        }
+        const std::uint32_t first =
+            (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u);
+        ent_slot[e] = s;
+        // The threads of a warp counting in the same slot take one atomic together.
+        ent_rank[e] =
+            groupIncrement(slot_cnt + s, cg::labeled_partition(cg::coalesced_threads(), s));
+        ent_val[e] = entryValue(i, first);
+      }
+}
+
+/// One thread per slot: a claimed slot becomes a cell (the next index of info->cells), with its
+/// count (read from slot_words[s], which then holds the cell: ~0u for one not stored), its
+/// compact key in cell_key and the slot rewritten to the lookup form. Cells at or past
+/// `cell_cap` are counted but not stored (countFillKernel has set need_sync then), and their
+/// slots are emptied. After need_sync every slot is emptied and nothing else is written: the
+/// queries that run before the fallback then find no cell and read nothing past the arrays.
+__global__ void countCellsKernel(BuildInfo* info, unsigned long long* slots,
+                                 std::uint32_t slot_count, std::uint32_t* __restrict__ slot_words,
+                                 std::uint32_t* __restrict__ cell_count,
+                                 unsigned long long* __restrict__ cell_key, std::uint32_t cell_cap) {
+  const std::uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
+  if (s >= slot_count) return;
+  if (info->need_sync) {
+    slots[s] = kEmptySlot;
+    return;
+  }
+  const unsigned long long key = slots[s];
+  if (key == kEmptySlot) return;
+  const std::uint32_t c = groupIncrement(&info->cells, cg::coalesced_threads());
+  if (c >= cell_cap) {
+    slot_words[s] = ~0u;
+    slots[s] = kEmptySlot;
+    return;
+  }
+  const detail::CellId id = compactKeyCell(key, info->coord_bits);
+  const unsigned long long h = detail::hashCellKey(detail::makeCellKey(id.level, id.x, id.y, id.z));
+  cell_count[c] = slot_words[s];
+  slot_words[s] = c;
+  cell_key[c] = key;
+  slots[s] = ((h >> 32) << 32) | c;
+}
+
+/// One thread per entry of countFillKernel: its place (its cell's first entry, from the scan of
+/// the counts, plus its rank), its value and sub-cell span there, and, for every 32nd place, the
+/// cell (block_cell, as cellsKernel). Nothing after need_sync.
+template <class S>
+__global__ void __launch_bounds__(kBuildBlock)
+    scatterKernel(std::uint32_t cap, const BuildInfo* info,
+                  const std::uint32_t* __restrict__ ent_slot,
+                  const std::uint32_t* __restrict__ ent_rank,
+                  const std::uint32_t* __restrict__ ent_val,
+                  const std::uint32_t* __restrict__ slot_cell,
+                  const std::uint32_t* __restrict__ cell_begin,
+                  const unsigned long long* __restrict__ cell_key, const Aabb<S>* __restrict__ box,
+                  std::uint32_t* __restrict__ entry_tri, std::uint32_t* __restrict__ entry_span,
+                  std::uint32_t* __restrict__ block_cell) {
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k >= writtenEntries(info, cap)) return;
+  const std::uint32_t c = slot_cell[ent_slot[k]];
+  if (c == ~0u) return;
+  const std::uint32_t pos = cell_begin[c] + ent_rank[k];
+  const std::uint32_t v = ent_val[k];
+  const detail::CellId id = compactKeyCell(cell_key[c], info->coord_bits);
+  const Aabb<double> bd = toDoubleBox(box[v & kEntryTriMask]);
+  entry_tri[pos] = v;
+  entry_span[pos] = detail::subcellSpan(bd, id.level, id.x, id.y, id.z, info->grid);
+  if ((pos & 31u) == 0) block_cell[pos >> 5] = c;
+}
+
 /// A tile of G lanes per stored cell: which of the kUpperLevels levels above the cell's own hold
 /// the cell's ancestor there (the cell containing it: coordinates shifted right by the
 /// difference, see selfQueryLevels; lane r looks up levels own + r + 1, own + r + 1 + G, ...),
@@ -485,11 +648,7 @@ struct PairSink {
 
 __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, std::uint32_t b) {
   // One atomic per group of threads emitting together (they are usually a warp's worth).
-  cg::coalesced_group g = cg::coalesced_threads();
-  unsigned long long base = 0;
-  if (g.thread_rank() == 0) base = atomicAdd(out.count, static_cast<unsigned long long>(g.size()));
-  base = g.shfl(base, 0);
-  const unsigned long long idx = base + g.thread_rank();
+  const unsigned long long idx = groupIncrement(out.count, cg::coalesced_threads());
   if (idx < out.capacity)
     out.pairs[idx] = (static_cast<unsigned long long>(a) << out.b_bits) | b;
 }
@@ -1092,6 +1251,7 @@ class PinnedBuffer {
 template <class S>
 struct MeshSource {
   const TriangleMesh<S>* part[2] = {nullptr, nullptr};
+  const HashedMesh<S>* owner[2] = {nullptr, nullptr};  // whose mesh() each part is
   std::size_t nv() const {
     return (part[0] ? part[0]->vertices.size() : 0) + (part[1] ? part[1]->vertices.size() : 0);
   }
@@ -1100,10 +1260,12 @@ struct MeshSource {
   }
 };
 template <class S>
-MeshSource<S> sourceOf(const TriangleMesh<S>* first, const TriangleMesh<S>* second = nullptr) {
+MeshSource<S> sourceOf(const HashedMesh<S>* first, const HashedMesh<S>* second = nullptr) {
   MeshSource<S> src;
-  src.part[0] = first;
-  src.part[1] = second;
+  src.owner[0] = first;
+  src.owner[1] = second;
+  src.part[0] = first ? &first->mesh() : nullptr;
+  src.part[1] = second ? &second->mesh() : nullptr;
   return src;
 }
 
@@ -1133,6 +1295,7 @@ struct CachedMesh {
   DeviceBuffer<unsigned long long> slots;
   DeviceBuffer<std::uint32_t> upper;  // HashView::upper (upperLevelsKernel), 2 bytes per triangle
   bool upper_ready = false;           // the last build wrote `upper` (else queries scan all levels)
+  bool count_build = false;  // the last build grouped its entries by counting (countFillKernel)
   DeviceBuffer<BuildInfo> dinfo;  // this mesh's grid and sizes, on the device
   PinnedBuffer staging;  // vertex/triangle uploads (per mesh: two uploads can be in flight)
   std::uint32_t slot_count = 0;
@@ -1359,6 +1522,49 @@ std::uint32_t rehashCap(std::uint32_t cap) {
 /// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
 bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", true); }
 
+/// Triangles up to which a re-hash without read-back groups its entries by counting. H100, the
+/// counting build against the sort (gpu_bench, same run): the UNC cloth ball (92k) 0.15 against
+/// 0.20-0.24 ms of build; the 1M cloth 0.70 against 0.54 ms, the 10M cloth 8.1 against 5.8 ms
+/// (the table and its atomics leave the L2 cache; see benchmarks/RESULTS-gpu.md).
+constexpr std::size_t kCountBuildMaxTriangles = 150000;
+
+/// Whether a re-hash without read-back of `nt` triangles groups its entries by counting instead
+/// of sorting them (countFillKernel): KDET_FCL_CUDA_COUNT_BUILD = 0 (never), 1 (always), unset
+/// (up to kCountBuildMaxTriangles). Read at every build.
+bool countBuildOn(std::size_t nt) {
+  return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", nt <= kCountBuildMaxTriangles);
+}
+
+/// Copies one part's vertices to the device. From staging::kPinMinBytes up (unless
+/// KDET_FCL_CUDA_PIN_VERTICES=0) the mesh's vertex buffer is registered as page-locked memory
+/// on its second upload (its whole pages; a buffer uploaded once, as a new mesh per frame, never
+/// pays the registration), the registration kept with the mesh (detail::HostPin, which the mesh
+/// drops before that buffer can go; updateVertices writes into the same buffer), and every later
+/// upload of it is one DMA from it, with no copy into the staging buffer but for the partial
+/// pages at its ends (staging::pinnedUpload). A buffer that cannot be registered is
+/// recorded as such and takes the staged path from then on. Returns whether the DMA path ran.
+/// (The query synchronises its stream before it returns, so the buffer is not read after.)
+template <class S>
+bool uploadVertices(Context& ctx, Vec3<S>* dst, const HashedMesh<S>* owner,
+                    const TriangleMesh<S>& part, char* stage) {
+  const std::size_t bytes = part.vertices.size() * sizeof(Vec3<S>);
+  const void* src = part.vertices.data();
+  if (owner != nullptr && bytes >= staging::kPinMinBytes && staging::pinVerticesOn()) {
+    detail::HostPin& pin = owner->hostPin();
+    if (pin.at() != src) {
+      pin.see(src);  // a first upload is staged: a buffer uploaded once is never registered
+    } else if (!pin.tried()) {
+      pin.set(src, staging::pinHostMemory(src, bytes));
+    }
+    if (pin.pinned()) {
+      CUDA_TRY(staging::pinnedUpload(dst, src, bytes, stage, ctx.stream));
+      return true;
+    }
+  }
+  CUDA_TRY(staging::stagedUpload(dst, src, bytes, stage, ctx.stream));
+  return false;
+}
+
 /// Whether a build of `m` records, per triangle, the levels above its own that hold a cell of its
 /// range (upperLevelsKernel): KDET_FCL_CUDA_UPPER_LEVELS = 0 (never), 1 (always), unset (while
 /// the mesh's last self query found at most 4 candidates per triangle, as spansFor; a mesh not
@@ -1407,7 +1613,13 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   trianglesKernel<S><<<tri_blocks, kBuildBlock, 0, s>>>(n, m.v.data(), m.t.data(), m.box.data(),
                                                         m.diam.data(), ctx.red.data());
   checkLaunch();
-  gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? m.sort_bits : 0);
+  // A re-hash without read-back whose cells need no size order groups its entries by counting
+  // (countFillKernel), not by a sort; its compact keys then need only fit in 64 bits, not in the
+  // sort's bits.
+  const bool count_build = async && !m.size_ordered && countBuildOn(nt);
+  m.count_build = count_build;
+  if (count_build) ++ctx.profile.count_builds;
+  gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? (count_build ? 64 : m.sort_bits) : 0);
   checkLaunch();
   countKernel<S><<<blocksFor(nt + 1, kBuildBlock), kBuildBlock, 0, s>>>(
       n, m.box.data(), m.diam.data(), dinfo, m.level.data(), tri_counts,
@@ -1467,121 +1679,160 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   // memory for it. Each array starts on a 256-byte boundary.
   const std::size_t e8 = (static_cast<std::size_t>(cap) + 31) & ~std::size_t(31);
   const std::size_t e4 = ((static_cast<std::size_t>(cap) + 1) / 2 + 31) & ~std::size_t(31);
-  ctx.cands.reserve(compact ? 2 * e8 + e4 : 4 * e8 + 3 * e4);
-  unsigned long long* const arena = ctx.cands.data();
-  unsigned long long* keys_a = arena;
-  unsigned long long* keys_b = arena + e8;
-  std::uint32_t* vals_a = reinterpret_cast<std::uint32_t*>(arena + (compact ? 2 : 4) * e8);
-  const unsigned long long* hi_sorted = nullptr;
-  const unsigned long long* keys_sorted = keys_b;
-  // Padding: the entries past the real ones (the host may not know how many there are) keep
-  // all-one keys, which sort after every real key (stably, so real entries come first).
-  CUDA_TRY(cudaMemsetAsync(keys_a, 0xFF, cap * sizeof(unsigned long long), s));
-  // After the sorts, a free key-sized buffer holds the run heads and their scan (2 x 4 bytes per
-  // entry in 8 bytes per entry), instead of two more entry-sized arrays.
-  unsigned long long* spare = keys_a;
-  if (compact) {
-    fillKernel<S, true><<<blocksFor(nt, kBuildBlock), kBuildBlock, 0, s>>>(
-        n, m.box.data(), m.level.data(), offsets, by_size, dinfo, keys_a, nullptr, vals_a,
-        nullptr, cap, dinfo);
+  if (count_build) {
+    // The counting build (countFillKernel): its scratch in the same idle buffer, in 32-bit
+    // arrays: per entry its slot, rank and value; per slot its count, then its cell; per cell its
+    // count.
+    auto words = [](std::size_t k) { return ((k + 1) / 2 + 31) & ~std::size_t(31); };
+    const std::size_t s4 = words(m.slot_count), c4 = words(std::size_t(cell_cap) + 1);
+    ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + s4 + c4));
+    std::uint32_t* const at = reinterpret_cast<std::uint32_t*>(ctx.cands.data());
+    std::uint32_t* const ent_slot = at;
+    std::uint32_t* const ent_rank = at + 2 * e4;
+    std::uint32_t* const ent_val = at + 4 * e4;
+    std::uint32_t* const slot_cnt = at + 6 * e4;  // the slot's cell after countCellsKernel
+    std::uint32_t* const cell_count = slot_cnt + 2 * s4;
+    countClearKernel<<<std::min<unsigned int>(blocksFor(std::max<std::size_t>(m.slot_count,
+                                                                                cell_cap + 1ull),
+                                                        kBuildBlock),
+                                              static_cast<unsigned int>(8 * g_num_sms)),
+                       kBuildBlock, 0, s>>>(m.slots.data(), m.slot_count, slot_cnt, cell_count,
+                                            cell_cap + 1);
     checkLaunch();
-    // The resident entry array is the sort's second value buffer; entriesKernel rewrites each
-    // sorted value in place (thread k reads and writes only entry k).
-    cub::DoubleBuffer<unsigned long long> kb(keys_a, keys_b);
-    cub::DoubleBuffer<std::uint32_t> vb(vals_a, m.entry_tri.data());
+    countFillKernel<S><<<blocksFor(nt, kBuildBlock), kBuildBlock, 0, s>>>(
+        n, m.box.data(), m.level.data(), offsets, dinfo, m.slots.data(), m.slot_count, slot_cnt,
+        ent_slot, ent_rank, ent_val, cap, cell_cap);
+    checkLaunch();
+    countCellsKernel<<<blocksFor(m.slot_count, kBuildBlock), kBuildBlock, 0, s>>>(
+        dinfo, m.slots.data(), m.slot_count, slot_cnt, cell_count, m.cell_key.data(), cell_cap);
+    checkLaunch();
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-      return cub::DeviceRadixSort::SortPairs(tmp, bytes, kb, vb, static_cast<int>(cap), 0,
-                                             m.sort_bits, s);
+      return cub::DeviceScan::ExclusiveSum(tmp, bytes, cell_count, m.cell_begin.data(),
+                                           static_cast<int>(cell_cap + 1), s);
     });
-    keys_sorted = kb.Current();
-    spare = kb.Alternate();
-    entriesKernel<S, true><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, nullptr,
-                                                      vb.Current(), nullptr, m.box.data(),
-                                                      m.entry_tri.data(), m.entry_span.data());
+    scatterKernel<S><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, ent_slot, ent_rank, ent_val,
+                                                slot_cnt, m.cell_begin.data(),
+                                                m.cell_key.data(), m.box.data(),
+                                                m.entry_tri.data(), m.entry_span.data(),
+                                                m.block_cell.data());
     checkLaunch();
   } else {
-    // Full 128-bit keys (never re-hashed without read-back, so cap >= entries): two stable
-    // passes (low word, then high word) sort by (hi, lo).
-    unsigned long long* hi_a = arena + 2 * e8;
-    unsigned long long* hi_b = arena + 3 * e8;
-    std::uint32_t* vals_b = reinterpret_cast<std::uint32_t*>(arena + 4 * e8 + e4);
-    std::uint32_t* tri_of = reinterpret_cast<std::uint32_t*>(arena + 4 * e8 + 2 * e4);
-    CUDA_TRY(cudaMemsetAsync(hi_a, 0xFF, cap * sizeof(unsigned long long), s));
-    fillKernel<S, false><<<blocksFor(nt, kBuildBlock), kBuildBlock, 0, s>>>(
-        n, m.box.data(), m.level.data(), offsets, by_size, dinfo, keys_a, hi_a, vals_a, tri_of,
-        cap, dinfo);
+    ctx.cands.reserve(compact ? 2 * e8 + e4 : 4 * e8 + 3 * e4);
+    unsigned long long* const arena = ctx.cands.data();
+    unsigned long long* keys_a = arena;
+    unsigned long long* keys_b = arena + e8;
+    std::uint32_t* vals_a = reinterpret_cast<std::uint32_t*>(arena + (compact ? 2 : 4) * e8);
+    const unsigned long long* hi_sorted = nullptr;
+    const unsigned long long* keys_sorted = keys_b;
+    // Padding: the entries past the real ones (the host may not know how many there are) keep
+    // all-one keys, which sort after every real key (stably, so real entries come first).
+    CUDA_TRY(cudaMemsetAsync(keys_a, 0xFF, cap * sizeof(unsigned long long), s));
+    // After the sorts, a free key-sized buffer holds the run heads and their scan (2 x 4 bytes per
+    // entry in 8 bytes per entry), instead of two more entry-sized arrays.
+    unsigned long long* spare = keys_a;
+    if (compact) {
+      fillKernel<S, true><<<blocksFor(nt, kBuildBlock), kBuildBlock, 0, s>>>(
+          n, m.box.data(), m.level.data(), offsets, by_size, dinfo, keys_a, nullptr, vals_a,
+          nullptr, cap, dinfo);
+      checkLaunch();
+      // The resident entry array is the sort's second value buffer; entriesKernel rewrites each
+      // sorted value in place (thread k reads and writes only entry k).
+      cub::DoubleBuffer<unsigned long long> kb(keys_a, keys_b);
+      cub::DoubleBuffer<std::uint32_t> vb(vals_a, m.entry_tri.data());
+      cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
+        return cub::DeviceRadixSort::SortPairs(tmp, bytes, kb, vb, static_cast<int>(cap), 0,
+                                               m.sort_bits, s);
+      });
+      keys_sorted = kb.Current();
+      spare = kb.Alternate();
+      entriesKernel<S, true><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, nullptr,
+                                                        vb.Current(), nullptr, m.box.data(),
+                                                        m.entry_tri.data(), m.entry_span.data());
+      checkLaunch();
+    } else {
+      // Full 128-bit keys (never re-hashed without read-back, so cap >= entries): two stable
+      // passes (low word, then high word) sort by (hi, lo).
+      unsigned long long* hi_a = arena + 2 * e8;
+      unsigned long long* hi_b = arena + 3 * e8;
+      std::uint32_t* vals_b = reinterpret_cast<std::uint32_t*>(arena + 4 * e8 + e4);
+      std::uint32_t* tri_of = reinterpret_cast<std::uint32_t*>(arena + 4 * e8 + 2 * e4);
+      CUDA_TRY(cudaMemsetAsync(hi_a, 0xFF, cap * sizeof(unsigned long long), s));
+      fillKernel<S, false><<<blocksFor(nt, kBuildBlock), kBuildBlock, 0, s>>>(
+          n, m.box.data(), m.level.data(), offsets, by_size, dinfo, keys_a, hi_a, vals_a, tri_of,
+          cap, dinfo);
+      checkLaunch();
+      const std::uint32_t mt = static_cast<std::uint32_t>(*ctx.hostTotal());  // read back above
+      cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
+        return cub::DeviceRadixSort::SortPairs(tmp, bytes, keys_a, keys_b, vals_a, vals_b,
+                                               static_cast<int>(mt), 0, 64, s);
+      });
+      const unsigned int mb = blocksFor(mt, kBuildBlock);
+      gatherKeysKernel<<<mb, kBuildBlock, 0, s>>>(mt, hi_a, vals_b, hi_b);
+      checkLaunch();
+      cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
+        return cub::DeviceRadixSort::SortPairs(tmp, bytes, hi_b, hi_a, vals_b, vals_a,
+                                               static_cast<int>(mt), 0, 64, s);
+      });
+      gatherKeysKernel<<<mb, kBuildBlock, 0, s>>>(mt, keys_a, vals_a, keys_b);
+      checkLaunch();
+      hi_sorted = hi_a;
+      entriesKernel<S, false><<<mb, kBuildBlock, 0, s>>>(mt, dinfo, keys_b, hi_sorted, tri_of,
+                                                         vals_a, m.box.data(), m.entry_tri.data(),
+                                                         m.entry_span.data());
+      checkLaunch();
+    }
+    std::uint32_t* head = reinterpret_cast<std::uint32_t*>(spare);
+    std::uint32_t* cell_index = head + cap;
+    // A re-hash keeps the table's size, so the heads kernel empties it; a build with read-backs
+    // sizes it after the cell count and clears it with a memset.
+    unsigned long long* const clear = async ? m.slots.data() : nullptr;
+    if (compact)
+      headsKernel<true><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, nullptr, head, clear,
+                                                   m.slot_count);
+    else
+      headsKernel<false><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, hi_sorted, head, clear,
+                                                    m.slot_count);
     checkLaunch();
-    const std::uint32_t mt = static_cast<std::uint32_t>(*ctx.hostTotal());  // read back above
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-      return cub::DeviceRadixSort::SortPairs(tmp, bytes, keys_a, keys_b, vals_a, vals_b,
-                                             static_cast<int>(mt), 0, 64, s);
+      return cub::DeviceScan::ExclusiveSum(tmp, bytes, head, cell_index, static_cast<int>(cap), s);
     });
-    const unsigned int mb = blocksFor(mt, kBuildBlock);
-    gatherKeysKernel<<<mb, kBuildBlock, 0, s>>>(mt, hi_a, vals_b, hi_b);
-    checkLaunch();
-    cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-      return cub::DeviceRadixSort::SortPairs(tmp, bytes, hi_b, hi_a, vals_b, vals_a,
-                                             static_cast<int>(mt), 0, 64, s);
-    });
-    gatherKeysKernel<<<mb, kBuildBlock, 0, s>>>(mt, keys_a, vals_a, keys_b);
-    checkLaunch();
-    hi_sorted = hi_a;
-    entriesKernel<S, false><<<mb, kBuildBlock, 0, s>>>(mt, dinfo, keys_b, hi_sorted, tri_of,
-                                                       vals_a, m.box.data(), m.entry_tri.data(),
-                                                       m.entry_span.data());
-    checkLaunch();
+    if (!async) {
+      // The cell count (heads past the entries are 0): size the cell arrays and the table by cells.
+      *ctx.hostCells() = 0;
+      std::uint32_t* hc = reinterpret_cast<std::uint32_t*>(ctx.hostCells());
+      CUDA_TRY(cudaMemcpyAsync(hc, cell_index + (cap - 1), sizeof(std::uint32_t),
+                               cudaMemcpyDeviceToHost, s));
+      CUDA_TRY(cudaMemcpyAsync(hc + 1, head + (cap - 1), sizeof(std::uint32_t),
+                               cudaMemcpyDeviceToHost, s));
+      CUDA_TRY(cudaStreamSynchronize(s));
+      const std::size_t cells = std::size_t(hc[0]) + hc[1];
+      m.cell_key.reserve(cells * m.key_words);
+      m.cell_begin.reserve(cells + cells / 8 + 1, false);
+      m.cell_cap = static_cast<std::uint32_t>(
+          std::min(m.cell_key.capacity() / m.key_words, m.cell_begin.capacity() - 1));
+      // Linear probing: most lookups are misses (empty cells of the query's range), which scan to
+      // the next empty slot, so the load stays low: 8 slots per cell where that is no more than
+      // one slot per entry (crowded cells, as in cloth: ~17 entries per cell on the UNC ball),
+      // and never fewer than 2 per cell. (A load of up to 2/3 cost 3-5% of phase 1 in call 1.)
+      const std::size_t c = m.cell_cap;
+      const std::size_t slots = std::max<std::size_t>(
+          64, std::max(2 * c, std::min<std::size_t>(8 * c, m.entry_cap)) + 1);
+      m.slots.reserve(slots, false);
+      m.slot_count = static_cast<std::uint32_t>(slots);
+      CUDA_TRY(cudaMemsetAsync(m.slots.data(), 0xFF, slots * sizeof(unsigned long long), s));
+    }
+    if (compact)
+      cellsKernel<true><<<eb, kBuildBlock, 0, s>>>(cap, keys_sorted, nullptr, head, cell_index,
+                                                   dinfo, async ? cell_cap : m.cell_cap,
+                                                   m.cell_begin.data(), m.cell_key.data(),
+                                                   m.slots.data(), m.slot_count,
+                                                   m.block_cell.data());
+    else
+      cellsKernel<false><<<eb, kBuildBlock, 0, s>>>(cap, keys_sorted, hi_sorted, head, cell_index,
+                                                    dinfo, m.cell_cap, m.cell_begin.data(),
+                                                    m.cell_key.data(), m.slots.data(), m.slot_count,
+                                                    m.block_cell.data());
   }
-  std::uint32_t* head = reinterpret_cast<std::uint32_t*>(spare);
-  std::uint32_t* cell_index = head + cap;
-  // A re-hash keeps the table's size, so the heads kernel empties it; a build with read-backs
-  // sizes it after the cell count and clears it with a memset.
-  unsigned long long* const clear = async ? m.slots.data() : nullptr;
-  if (compact)
-    headsKernel<true><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, nullptr, head, clear,
-                                                 m.slot_count);
-  else
-    headsKernel<false><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, keys_sorted, hi_sorted, head, clear,
-                                                  m.slot_count);
-  checkLaunch();
-  cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-    return cub::DeviceScan::ExclusiveSum(tmp, bytes, head, cell_index, static_cast<int>(cap), s);
-  });
-  if (!async) {
-    // The cell count (heads past the entries are 0): size the cell arrays and the table by cells.
-    *ctx.hostCells() = 0;
-    std::uint32_t* hc = reinterpret_cast<std::uint32_t*>(ctx.hostCells());
-    CUDA_TRY(cudaMemcpyAsync(hc, cell_index + (cap - 1), sizeof(std::uint32_t),
-                             cudaMemcpyDeviceToHost, s));
-    CUDA_TRY(cudaMemcpyAsync(hc + 1, head + (cap - 1), sizeof(std::uint32_t),
-                             cudaMemcpyDeviceToHost, s));
-    CUDA_TRY(cudaStreamSynchronize(s));
-    const std::size_t cells = std::size_t(hc[0]) + hc[1];
-    m.cell_key.reserve(cells * m.key_words);
-    m.cell_begin.reserve(cells + cells / 8 + 1, false);
-    m.cell_cap = static_cast<std::uint32_t>(
-        std::min(m.cell_key.capacity() / m.key_words, m.cell_begin.capacity() - 1));
-    // Linear probing: most lookups are misses (empty cells of the query's range), which scan to
-    // the next empty slot, so the load stays low: 8 slots per cell where that is no more than
-    // one slot per entry (crowded cells, as in cloth: ~17 entries per cell on the UNC ball),
-    // and never fewer than 2 per cell. (A load of up to 2/3 cost 3-5% of phase 1 in call 1.)
-    const std::size_t c = m.cell_cap;
-    const std::size_t slots = std::max<std::size_t>(
-        64, std::max(2 * c, std::min<std::size_t>(8 * c, m.entry_cap)) + 1);
-    m.slots.reserve(slots, false);
-    m.slot_count = static_cast<std::uint32_t>(slots);
-    CUDA_TRY(cudaMemsetAsync(m.slots.data(), 0xFF, slots * sizeof(unsigned long long), s));
-  }
-  if (compact)
-    cellsKernel<true><<<eb, kBuildBlock, 0, s>>>(cap, keys_sorted, nullptr, head, cell_index,
-                                                 dinfo, async ? cell_cap : m.cell_cap,
-                                                 m.cell_begin.data(), m.cell_key.data(),
-                                                 m.slots.data(), m.slot_count,
-                                                 m.block_cell.data());
-  else
-    cellsKernel<false><<<eb, kBuildBlock, 0, s>>>(cap, keys_sorted, hi_sorted, head, cell_index,
-                                                  dinfo, m.cell_cap, m.cell_begin.data(),
-                                                  m.cell_key.data(), m.slots.data(), m.slot_count,
-                                                  m.block_cell.data());
   checkLaunch();
   // The levels above each triangle's own that hold a cell of its range (self queries skip the
   // others without a lookup), where they pay (upperLevelsFor).
@@ -1634,6 +1885,14 @@ void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     need = std::max(need, b);
     CUDA_TRY(cub::DeviceScan::ExclusiveSum(nullptr, b, p, p, static_cast<int>(cap), s));
     need = std::max(need, b);
+    if (countBuildOn(nt) && !m.size_ordered) {  // the counting build's scratch and scan
+      const std::uint32_t cell_cap = rehashCap(m.cell_cap);
+      auto words = [](std::size_t k) { return ((k + 1) / 2 + 31) & ~std::size_t(31); };
+      ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + words(m.slot_count) +
+                                                  words(std::size_t(cell_cap) + 1)));
+      CUDA_TRY(cub::DeviceScan::ExclusiveSum(nullptr, b, p, p, static_cast<int>(cell_cap + 1), s));
+      need = std::max(need, b);
+    }
   }
   ctx.cub_temp.reserve(need);
 }
@@ -1649,7 +1908,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   const std::uint32_t cap = rehashCap(m.entry_cap), cell_cap = rehashCap(m.cell_cap);
   const std::vector<std::uintptr_t> key = {
       nt, cap, cell_cap, m.slot_count, std::uintptr_t(m.sort_bits), std::uintptr_t(g_num_sms),
-      std::uintptr_t(m.size_ordered),
+      std::uintptr_t(m.size_ordered), std::uintptr_t(countBuildOn(nt)),
       std::uintptr_t(ctx.red_ready), std::uintptr_t(upperLevelsFor(m.self_density)),
       reinterpret_cast<std::uintptr_t>(m.upper.data()),
       reinterpret_cast<std::uintptr_t>(m.v.data()), reinterpret_cast<std::uintptr_t>(m.t.data()),
@@ -1693,6 +1952,8 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     m.pending_entry_cap = cap;
     m.pending_cell_cap = cell_cap;
     ++ctx.profile.rehashes_async;
+    m.count_build = !m.size_ordered && countBuildOn(nt);  // as captured (the graph's key)
+    if (m.count_build) ++ctx.profile.count_builds;
   }
   ++ctx.profile.rehash_graphs;
   CUDA_TRY(cudaGraphLaunch(m.graph, s));
@@ -1730,11 +1991,13 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upl
   // Each part's vertices (and triangles) go to their place in the arrays, through their own part
   // of the stage; the second part's vertex indices are then shifted past the first's vertices.
   std::size_t v_at = 0, t_at = 0;
-  for (const TriangleMesh<S>* part : mesh.part) {
+  for (int k = 0; k < 2; ++k) {
+    const TriangleMesh<S>* part = mesh.part[k];
     if (part == nullptr) continue;
     const std::size_t pv = part->vertices.size(), pt = part->triangles.size();
-    CUDA_TRY(staging::stagedUpload(m.v.data() + v_at, part->vertices.data(), pv * sizeof(Vec3<S>),
-                                   stage + v_at * sizeof(Vec3<S>), s));
+    if (uploadVertices(ctx, m.v.data() + v_at, mesh.owner[k], *part,
+                       stage + v_at * sizeof(Vec3<S>)))
+      ++ctx.profile.pinned_uploads;
     if (upload_tris) {
       CUDA_TRY(staging::stagedUpload(m.t.data() + 3 * t_at, part->triangles.data(),
                                      pt * sizeof(Triangle),
@@ -1797,7 +2060,7 @@ bool checkPending(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh,
 template <class S>
 CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm, const HashedMesh<S>* hm2 = nullptr) {
   auto& list = ctx.meshes(static_cast<S*>(nullptr));
-  const MeshSource<S> src = sourceOf(&hm.mesh(), hm2 ? &hm2->mesh() : nullptr);
+  const MeshSource<S> src = sourceOf(&hm, hm2);
   std::uint64_t fp = fingerprintOf(hm.mesh());
   if (hm2) fp = fp * 1099511628211ull ^ fingerprintOf(hm2->mesh());
   const std::uint64_t v2 = hm2 ? hm2->version() : 0;
@@ -2420,7 +2683,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     return filter;
   };
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
-                           {sourceOf(&a.mesh()), sourceOf(&b.mesh())}};
+                           {sourceOf(&a), sourceOf(&b)}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,
                              std::max(A.inter_density, B.inter_density), 0.0, false, options);
   A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
@@ -2525,7 +2788,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
     ctx.profile.pairs = kept.pairs.size();
     return kept;
   }
-  QueryResult res = selfQuery(ctx, M, sourceOf(&mesh.mesh()), 0, nullptr, options);
+  QueryResult res = selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options);
   M.kept_self.offer(ticket, options, res);
   return res;
 }
@@ -2540,7 +2803,7 @@ AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<
   ctx.record(0);
   CachedMesh<S>& M = acquire(ctx, a, &b);
   QueryResult parts[3];
-  selfQuery(ctx, M, sourceOf(&a.mesh(), &b.mesh()), static_cast<std::uint32_t>(a.numTriangles()),
+  selfQuery(ctx, M, sourceOf(&a, &b), static_cast<std::uint32_t>(a.numTriangles()),
             parts, options);
   ctx.profile.joint = true;
   r.self_a = std::move(parts[0]);
@@ -2565,6 +2828,8 @@ void readEveryKnob() {
   (void)fullKeys();
   (void)rehashCap(1);
   (void)rehashGraphOn();
+  (void)countBuildOn(0);
+  (void)staging::pinVerticesOn();
   (void)upperLevelsFor(0);
   (void)capacityKnob();
   (void)planeFilterOn();
@@ -2600,9 +2865,13 @@ auto guarded(F&& f) -> decltype(f(std::declval<Context&>())) {
     evict<double>(ctx);
     return r;
   } catch (const CudaError&) {
+    // Nothing enqueued may still read a host buffer once the query has thrown (a vertex upload
+    // from a mesh's own pinned buffer, or from the stage).
+    (void)cudaStreamSynchronize(ctx.stream);
     ctx.releaseAll();
     throw;
   } catch (...) {
+    (void)cudaStreamSynchronize(ctx.stream);
     // A non-CUDA failure (bad input, bad_alloc) may have left a half-built entry: drop those.
     ctx.meshes_f.remove_if([](const CachedMesh<float>& m) { return !m.valid; });
     ctx.meshes_d.remove_if([](const CachedMesh<double>& m) { return !m.valid; });

@@ -51,8 +51,13 @@
 // while the mesh's last self query found at most 4 candidates per triangle). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
-// force the thread count and the chunk size (read at every upload). The pairs come back through
-// pinned memory in 256 KiB chunks, each appended to the result as it arrives;
+// force the thread count and the chunk size (read at every upload). A vertex array of 1 MiB or
+// more is instead registered as page-locked memory on its first upload (the registration kept
+// with the HashedMesh, detail::HostPin, and dropped by it before that buffer can go;
+// updateVertices writes into the same buffer) and copied by one DMA from there, with no staging
+// copy (QueryProfile::pinned_uploads); KDET_FCL_CUDA_PIN_VERTICES=0 keeps the staged copy.
+// The pairs come back through pinned memory in 256 KiB chunks, each appended to the result as it
+// arrives;
 // KDET_FCL_CUDA_DOWNLOAD_CHUNK=b sets that chunk size (read at every query). Every query first
 // reads every knob (checkKnobs()): a value a knob does not accept (not 0 or 1 for a switch, not
 // one of its numbers, out of its range, "abc") throws InvalidInputError naming the variable,
@@ -132,6 +137,12 @@ struct QueryProfile {
                                 ///< 128-bit keys, KDET_FCL_CUDA_SYNC_REHASH=1, or a fallback)
   int rehash_fallbacks = 0;     ///< re-hashes that did not fit and were rebuilt (query rerun)
   int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
+  int count_builds = 0;         ///< of the re-hashes without read-back, those that grouped their
+                                ///< entries by counting in the cell table, not by a sort
+                                ///< (meshes of up to 150k triangles;
+                                ///< KDET_FCL_CUDA_COUNT_BUILD=0 never, 1 always)
+  int pinned_uploads = 0;       ///< vertex uploads copied straight from the mesh's page-locked
+                                ///< buffer (KDET_FCL_CUDA_PIN_VERTICES; arrays of 1 MiB and up)
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
   bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)

@@ -81,8 +81,9 @@ struct BuildInfo {
   int fits64;      ///< level_bits + 3 * coord_bits <= 64: the compact 64-bit key is exact
   unsigned int entries;  ///< (cell, triangle) entries of this build (may exceed the capacity)
   unsigned int cells;    ///< occupied cells of this build (may exceed the capacity)
-  int need_sync;   ///< re-hash without read-back only: the keys no longer fit the host's plan
-  int pad_;
+  int need_sync;   ///< re-hash without read-back only: the keys no longer fit the host's plan,
+                   ///< or (counting build) its cells outgrew the table
+  unsigned int inserted;  ///< counting build (countFillKernel): distinct cells inserted so far
 };
 
 /// The compact cell key: level and coordinates packed into cb bits per axis (exact and one-to-one

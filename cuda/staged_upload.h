@@ -25,11 +25,14 @@
 // KDET_FCL_CUDA_DOWNLOAD_CHUNK=b the same for downloads.
 
 #include <cuda_runtime.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -76,6 +79,85 @@ inline int uploadThreads(std::size_t chunks) {
   }
   const long long most = static_cast<long long>(std::max<std::size_t>(chunks, 1));
   return static_cast<int>(std::max<long long>(1, std::min(t, most)));
+}
+
+/// Vertex arrays from this size up may be uploaded straight from their own buffer, registered as
+/// page-locked memory once (pinHostMemory), instead of through a staging copy: on an H100 host
+/// 6.7 MB took 0.13 ms by DMA alone and 0.37-0.41 ms staged by 2-8 threads
+/// (benchmarks/RESULTS-gpu.md, "Vertex upload"). Below it the staged copy costs little.
+constexpr std::size_t kPinMinBytes = std::size_t(1) << 20;
+
+/// KDET_FCL_CUDA_PIN_VERTICES=0 keeps every vertex upload on the staged path (for comparisons;
+/// read at every upload). Any value but 0 or 1 throws InvalidInputError.
+inline bool pinVerticesOn() { return detail::switchKnob("KDET_FCL_CUDA_PIN_VERTICES", true); }
+
+/// The whole pages inside [src, src + bytes), as offsets [begin, end) from src (begin == end:
+/// none). Those pages hold no other buffer, so registering them never collides with another
+/// buffer's registration (cudaHostRegister refuses a page registered twice).
+struct PageInterior {
+  std::size_t begin = 0, end = 0;
+};
+inline PageInterior pageInterior(const void* src, std::size_t bytes) {
+  static const std::uintptr_t page = [] {
+    const long p = sysconf(_SC_PAGESIZE);
+    return std::uintptr_t(p > 0 ? p : 4096);
+  }();
+  const std::uintptr_t a = reinterpret_cast<std::uintptr_t>(src), b = a + bytes;
+  const std::uintptr_t lo = (a + page - 1) / page * page, hi = b / page * page;
+  if (hi <= lo) return {};
+  return {std::size_t(lo - a), std::size_t(hi - a)};
+}
+
+/// Registers the whole pages of the `bytes` at `src` (pageInterior) as page-locked memory.
+/// Returns the registration, whose last copy unregisters it when dropped, or nullptr (the
+/// runtime's error cleared: it is not sticky) when there is no whole page or the runtime refuses.
+/// The caller must drop it before the memory is freed, and must not change the memory while a
+/// copy from it may be in flight.
+inline std::shared_ptr<void> pinHostMemory(const void* src, std::size_t bytes) {
+  const PageInterior in = pageInterior(src, bytes);
+  if (in.end == in.begin) return nullptr;
+  void* p = const_cast<char*>(static_cast<const char*>(src)) + in.begin;
+  if (cudaHostRegister(p, in.end - in.begin, cudaHostRegisterDefault) != cudaSuccess) {
+    (void)cudaGetLastError();
+    return nullptr;
+  }
+  int device = 0;
+  if (cudaGetDevice(&device) != cudaSuccess) {
+    (void)cudaGetLastError();
+    device = 0;
+  }
+  // Unregistered in the device's context it was registered in, whatever the calling thread's
+  // current device; an error there is cleared, so that it never reaches a later check.
+  return std::shared_ptr<void>(p, [device](void* q) {
+    int current = device;
+    if (cudaGetDevice(&current) != cudaSuccess) current = device;
+    if (current != device) (void)cudaSetDevice(device);
+    (void)cudaHostUnregister(q);
+    if (current != device) (void)cudaSetDevice(current);
+    (void)cudaGetLastError();
+  });
+}
+
+/// Copies `bytes` from `src`, whose whole pages pinHostMemory registered, to device memory
+/// `dst` on stream `s`: those pages by one DMA from `src` itself, the partial pages at both ends
+/// (under 4 KiB each) through `stage` (pinned, at least `bytes` long, at the same offsets). The
+/// caller synchronises `s` before `src` or the stage change again.
+inline cudaError_t pinnedUpload(void* dst, const void* src, std::size_t bytes, void* stage,
+                                cudaStream_t s) {
+  const PageInterior in = pageInterior(src, bytes);
+  auto* d = static_cast<char*>(dst);
+  const auto* from = static_cast<const char*>(src);
+  auto* h = static_cast<char*>(stage);
+  const std::size_t parts[2][2] = {{0, in.begin}, {in.end, bytes}};
+  for (const auto& part : parts) {
+    if (part[1] == part[0]) continue;
+    std::memcpy(h + part[0], from + part[0], part[1] - part[0]);
+    const cudaError_t e = cudaMemcpyAsync(d + part[0], h + part[0], part[1] - part[0],
+                                          cudaMemcpyHostToDevice, s);
+    if (e != cudaSuccess) return e;
+  }
+  return cudaMemcpyAsync(d + in.begin, from + in.begin, in.end - in.begin,
+                         cudaMemcpyHostToDevice, s);
 }
 
 /// Copies `bytes` from pageable host memory `src` to device memory `dst` through the pinned

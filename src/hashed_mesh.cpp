@@ -155,7 +155,9 @@ HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int th
 }
 
 template <class S>
-HashedMesh<S>::~HashedMesh() = default;
+HashedMesh<S>::~HashedMesh() {
+  host_pin_.reset();  // before mesh_ frees the buffer it is for
+}
 template <class S>
 HashedMesh<S>::HashedMesh(HashedMesh&&) noexcept = default;
 template <class S>
@@ -221,6 +223,7 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
 template <class S>
 void HashedMesh<S>::setMesh(TriangleMesh<S> mesh) {
   mesh.validate(false, "setMesh");
+  host_pin_.reset();  // the vertex buffer is replaced
   mesh_ = std::move(mesh);
   geometryChanged();
 }

@@ -104,6 +104,8 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_SYNC_REHASH", on_off, not_on_off},
       {"KDET_FCL_CUDA_FULL_KEYS", on_off, not_on_off},
       {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},
+      {"KDET_FCL_CUDA_COUNT_BUILD", on_off, not_on_off},
+      {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
@@ -319,6 +321,79 @@ TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
   cloth.setMesh(shuffled);
   expectSameInter(cloth, sphere, "shuffled triangles");
   expectSameSelf(cloth, "shuffled self");
+}
+
+// Vertex arrays of 1 MiB and up are registered as page-locked memory on their second upload and
+// then copied straight from the mesh's buffer (QueryProfile::pinned_uploads; a re-hash that
+// falls back uploads again), frame after frame, as long as the buffer stays (updateVertices
+// keeps it). A new buffer (setMesh) starts over; a mesh's registration goes with it (new meshes,
+// perhaps at the same address, register again: a leaked registration would refuse them); both
+// parts of a joint query are handled; small arrays and KDET_FCL_CUDA_PIN_VERTICES=0 are staged.
+// Every answer equals the CPU's.
+TEST(CudaQuery, LargeVertexArraysAreCopiedStraightFromTheirRegisteredBuffer) {
+  KDET_SKIP_WITHOUT_DEVICE();
+  kdet_test::ScopedEnv pin_default("KDET_FCL_CUDA_PIN_VERTICES", nullptr);
+  cuda::setProfiling(true);
+  const int n = 320;  // 321^2 float vertices: 1.24 MB
+  auto frame = [&](double t) { return makeDrapedCloth<float>(n, 4.0f, 1.0f, 0.03f, float(t)); };
+  ASSERT_GE(frame(0).vertices.size() * sizeof(Vec3<float>), std::size_t(1) << 20);
+  HashedMesh<float> sphere(makeSphere<float>({0, 0, 0}, 1.0f, 32, 16));  // small: staged
+  HashedMesh<float> cloth(frame(0.2));
+  // Pinned uploads of the last query, less the re-uploads of its fallbacks.
+  auto pinned = [&]() {
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    return p.pinned_uploads > 0 ? p.pinned_uploads - p.rehash_fallbacks : 0;
+  };
+  auto inter = [&](const std::string& what) {
+    expectSameInter(cloth, sphere, what);
+    return pinned();
+  };
+  EXPECT_EQ(inter("first build"), 0);  // a first upload is staged
+  const void* buffer = cloth.mesh().vertices.data();
+  EXPECT_EQ(cloth.hostPin().at(), buffer);
+  EXPECT_FALSE(cloth.hostPin().tried());
+  for (double t : {0.4, 0.6, 0.8}) {
+    cloth.updateVertices(frame(t).vertices);
+    const int p = inter("t = " + std::to_string(t));
+    if (t == 0.4 && cloth.hostPin().tried() && !cloth.hostPin().pinned())
+      GTEST_SKIP() << "this machine refused to register host memory (cudaHostRegister)";
+    EXPECT_EQ(p, 1);
+    EXPECT_EQ(cloth.mesh().vertices.data(), buffer);
+    EXPECT_TRUE(cloth.hostPin().pinned());
+  }
+  EXPECT_EQ(sphere.hostPin().at(), nullptr);  // small: never recorded
+  {
+    kdet_test::ScopedEnv off("KDET_FCL_CUDA_PIN_VERTICES", "0");
+    cloth.updateVertices(frame(0.9).vertices);
+    EXPECT_EQ(inter("staged"), 0);
+  }
+  cloth.setMesh(frame(1.0));  // a new buffer
+  EXPECT_EQ(cloth.hostPin().at(), nullptr);
+  EXPECT_EQ(inter("after setMesh"), 0);
+  cloth.updateVertices(frame(0.3).vertices);
+  EXPECT_EQ(inter("after setMesh, second upload"), 1);
+  EXPECT_EQ(cloth.hostPin().at(), cloth.mesh().vertices.data());
+  for (int k = 0; k < 3; ++k) {  // new meshes of the same size, each registered afresh
+    HashedMesh<float> again(frame(0.5));
+    expectSameSelf(again, "new mesh " + std::to_string(k));
+    EXPECT_EQ(pinned(), 0) << k;
+    cuda::markDeformed(again);
+    expectSameSelf(again, "new mesh, second upload " + std::to_string(k));
+    EXPECT_EQ(pinned(), 1) << k;
+    EXPECT_TRUE(again.hostPin().pinned()) << k;
+  }
+  HashedMesh<float> other(frame(0.55));
+  for (int round = 0; round < 2; ++round) {
+    if (round == 1) other.updateVertices(frame(0.65).vertices);
+    const AllPairsResult cpu = intersectAll(cloth, other, on(Backend::Cpu));
+    const AllPairsResult gpu = intersectAll(cloth, other, on(Backend::Cuda));
+    EXPECT_EQ(gpu.self_a.pairs, sorted(cpu.self_a.pairs)) << round;
+    EXPECT_EQ(gpu.self_b.pairs, sorted(cpu.self_b.pairs)) << round;
+    EXPECT_EQ(gpu.inter.pairs, sorted(cpu.inter.pairs)) << round;
+    // The cloth's buffer is registered already; the other's on its second upload.
+    if (cuda::lastQueryProfile().joint) EXPECT_EQ(pinned(), round == 0 ? 1 : 2) << round;
+  }
+  cuda::setProfiling(false);
 }
 
 TEST(CudaQuery, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
@@ -1270,6 +1345,162 @@ TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
     }
   }
   unsetenv("KDET_FCL_CUDA_REHASH_GRAPH");
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
+  // A re-hash without read-back of a mesh of up to 150k triangles whose cells need no size order
+  // (the warp scan, the default) groups its entries by counting them in the cell table
+  // (countFillKernel) instead of sorting them; KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort, 1
+  // counts at any size. The order of the cells, and of the
+  // entries inside a cell, then follows the atomics, but the candidates and the pairs must be
+  // the sort's and the CPU's at every frame: self queries (with the cells' pairs on and off),
+  // inter queries both ways and the joint query, on a deforming cloth over a sphere, a crowded
+  // soup (dozens of entries per cell) and a soup of many sizes. The tile scan (cells by size)
+  // keeps the sort. Forced overflows of the cells and entries (KDET_FCL_CUDA_REHASH_CAP) fall
+  // back to a build with read-backs, with the same pairs.
+  KDET_SKIP_WITHOUT_DEVICE();
+  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no counting build)";
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
+  kdet_test::ScopedEnv warp("KDET_FCL_CUDA_SCAN", "warp");
+  cuda::setProfiling(true);
+  struct Run {
+    std::vector<TrianglePair> pairs;
+    std::size_t candidates = 0;
+    cuda::QueryProfile profile;
+  };
+  auto self = [](const HashedMesh<S>& m) {
+    cuda::markDeformed(m);
+    Run r;
+    r.pairs = intersectSelf(m, on(Backend::Cuda)).pairs;
+    r.profile = cuda::lastQueryProfile();
+    r.candidates = r.profile.candidates;
+    return r;
+  };
+  auto inter = [](const HashedMesh<S>& a, const HashedMesh<S>& b) {
+    cuda::markDeformed(a);
+    cuda::markDeformed(b);
+    Run r;
+    r.pairs = intersectMeshes(a, b, on(Backend::Cuda)).pairs;
+    r.profile = cuda::lastQueryProfile();
+    r.candidates = r.profile.candidates;
+    return r;
+  };
+  auto clothAt = [](double t) { return makeDrapedCloth<S>(60, 4, 1, S(0.03), S(t)); };
+  HashedMesh<S> cloth(clothAt(0.5)), next(clothAt(0.55));
+  HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
+  HashedMesh<S> crowded(makeRandomSoup<S>(4000, S(0.3), S(0.05), S(0.3), 7));
+  HashedMesh<S> sizes(makeRandomSoup<S>(4001, 1, S(1e-3), S(0.2), 9));
+  const std::pair<const char*, HashedMesh<S>*> selfs[] = {
+      {"cloth", &cloth}, {"crowded soup", &crowded}, {"soup of sizes", &sizes}};
+  for (const auto& sm : selfs)
+    EXPECT_EQ(self(*sm.second).pairs, sorted(intersectSelf(*sm.second).pairs)) << sm.first;
+  EXPECT_EQ(inter(cloth, sphere).pairs, sorted(intersectMeshes(cloth, sphere).pairs));
+  // (first builds, with read-backs: the sphere's too)
+  std::size_t counted = 0;
+  for (double t : {0.6, 0.8, 1.0}) {
+    cloth.updateVertices(clothAt(t).vertices);
+    next.updateVertices(clothAt(t + 0.05).vertices);
+    const std::string at = "t = " + std::to_string(t);
+    for (const auto& [what, m] : selfs) {
+      const std::vector<TrianglePair> cpu = sorted(intersectSelf(*m).pairs);
+      for (const char* cells : {"0", "1"}) {
+        kdet_test::ScopedEnv cells_env("KDET_FCL_CUDA_SELF_CELLS", cells);
+        const std::string w = std::string(what) + ", " + at + ", self cells " + cells;
+        Run by_count, by_sort;
+        {
+          kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", nullptr);  // (small: counts)
+          by_count = self(*m);
+        }
+        {
+          kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "0");
+          by_sort = self(*m);
+        }
+        EXPECT_EQ(by_count.profile.rehashes_async, 1) << w;
+        EXPECT_EQ(by_count.profile.count_builds, 1) << w;
+        // The cloth's new frames may outgrow the arrays of its last build (then one fallback);
+        // the soups keep their geometry.
+        if (m != &cloth) EXPECT_EQ(by_count.profile.rehash_fallbacks, 0) << w;
+        EXPECT_LE(by_count.profile.rehash_fallbacks, 1) << w;
+        EXPECT_EQ(by_sort.profile.rehashes_async, 1) << w;
+        EXPECT_EQ(by_sort.profile.count_builds, 0) << w;
+        EXPECT_EQ(by_count.pairs, cpu) << w;
+        EXPECT_EQ(by_sort.pairs, cpu) << w;
+        EXPECT_EQ(by_count.candidates, by_sort.candidates) << w;
+        counted += cpu.size();
+      }
+    }
+    // Inter queries, both meshes re-hashed, both ways; then the joint query of two frames.
+    const std::vector<TrianglePair> cpu = sorted(intersectMeshes(cloth, sphere).pairs);
+    const Run a = inter(cloth, sphere), b = inter(sphere, cloth);
+    EXPECT_EQ(a.profile.count_builds, 2) << at;
+    EXPECT_EQ(a.pairs, cpu) << at;
+    EXPECT_EQ(b.pairs, sorted(intersectMeshes(sphere, cloth).pairs)) << at;
+    {
+      kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "0");
+      const Run c = inter(cloth, sphere);
+      EXPECT_EQ(c.profile.count_builds, 0) << at;
+      EXPECT_EQ(c.candidates, a.candidates) << at;
+    }
+    cuda::markDeformed(cloth);
+    cuda::markDeformed(next);
+    const AllPairsResult all = intersectAll(cloth, next, on(Backend::Cuda));
+    EXPECT_TRUE(cuda::lastQueryProfile().joint) << at;
+    EXPECT_EQ(all.self_a.pairs, sorted(intersectSelf(cloth).pairs)) << at << ": joint self a";
+    EXPECT_EQ(all.self_b.pairs, sorted(intersectSelf(next).pairs)) << at << ": joint self b";
+    EXPECT_EQ(all.inter.pairs, sorted(intersectMeshes(cloth, next).pairs)) << at << ": joint inter";
+    counted += cpu.size() + all.inter.pairs.size();
+  }
+  EXPECT_GT(counted, 1000u);
+  {
+    // The tile scan wants its cells by size: the sort.
+    kdet_test::ScopedEnv tile("KDET_FCL_CUDA_SCAN", "tile");
+    self(cloth);  // a re-hash (by the sort) that lays the cells out by size
+    const Run r = self(cloth);
+    EXPECT_EQ(r.profile.rehashes_async, 1);
+    EXPECT_EQ(r.profile.count_builds, 0);
+    EXPECT_EQ(r.pairs, sorted(intersectSelf(cloth).pairs));
+  }
+  self(cloth);
+  for (const char* cap : {"1", "100", "2000"}) {
+    // Too many cells or entries for the arrays: counted, not stored, and the fallback.
+    kdet_test::ScopedEnv cap_env("KDET_FCL_CUDA_REHASH_CAP", cap);
+    for (const auto& [what, m] : selfs) {
+      const std::string w = std::string(what) + ", cap " + cap;
+      const Run r = self(*m);
+      EXPECT_EQ(r.profile.count_builds, 1) << w;
+      EXPECT_EQ(r.profile.rehash_fallbacks, 1) << w;
+      EXPECT_EQ(r.pairs, sorted(intersectSelf(*m).pairs)) << w;
+    }
+  }
+  {
+    // Above 150k triangles the default is the sort (the counting build is slower there); the
+    // knob forces the count, with the same candidates and pairs. The sphere (small) counts.
+    HashedMesh<S> big(makeDrapedCloth<S>(280, 4, 1, S(0.03), S(1)));  // 156,800 triangles
+    const std::vector<TrianglePair> cpu = sorted(intersectMeshes(big, sphere).pairs);
+    inter(big, sphere);  // the first build, with read-backs
+    Run by_default, by_count;
+    {
+      kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", nullptr);
+      by_default = inter(big, sphere);
+    }
+    {
+      kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "1");
+      by_count = inter(big, sphere);
+    }
+    EXPECT_EQ(by_default.profile.rehashes_async, 2);
+    EXPECT_EQ(by_default.profile.count_builds, 1);  // the sphere's
+    EXPECT_EQ(by_count.profile.rehashes_async, 2);
+    EXPECT_EQ(by_count.profile.count_builds, 2);
+    EXPECT_GT(cpu.size(), 100u);
+    EXPECT_EQ(by_default.pairs, cpu);
+    EXPECT_EQ(by_count.pairs, cpu);
+    EXPECT_EQ(by_count.candidates, by_default.candidates);
+  }
   cuda::setProfiling(false);
 #endif
 }

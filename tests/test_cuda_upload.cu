@@ -2,15 +2,19 @@
 // Upload: every byte arrives, nothing beyond the range is written, whatever the number of host
 // threads and the chunk size. Download: every element arrives, in order, in whole-element chunks,
 // and a throwing consumer leaves cleanly. The knobs are parsed and bounded, and a value out of
-// bounds throws. The copy tests skip without a device; the knob and empty-range tests need none.
+// bounds throws. Pinned uploads (a registered range's whole pages by DMA, its ends staged) bring
+// every byte too. The copy tests skip without a device; the knob, page and empty-range tests need
+// none.
 
 #include <cuda_runtime.h>
+#include <unistd.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -27,6 +31,38 @@ bool haveDevice() {
   return cudaGetDeviceCount(&n) == cudaSuccess && n > 0;
 }
 
+/// A device buffer of `bytes` + kGuard, a pinned stage of `bytes` and a stream, for the upload
+/// tests; check() uploads a range with `upload` and compares what arrived, and the guard bytes
+/// after it, which must be untouched.
+struct UploadRig {
+  static constexpr std::size_t kGuard = 256;
+  unsigned char* dev = nullptr;
+  void* stage = nullptr;
+  cudaStream_t s = nullptr;
+  std::vector<unsigned char> back;
+  explicit UploadRig(std::size_t bytes) : back(bytes + kGuard) {
+    EXPECT_EQ(cudaMalloc(&dev, bytes + kGuard), cudaSuccess);
+    EXPECT_EQ(cudaMallocHost(&stage, bytes), cudaSuccess);
+    EXPECT_EQ(cudaStreamCreate(&s), cudaSuccess);
+  }
+  ~UploadRig() {
+    EXPECT_EQ(cudaStreamDestroy(s), cudaSuccess);
+    EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
+    EXPECT_EQ(cudaFree(dev), cudaSuccess);
+  }
+  template <class Upload>
+  void check(const unsigned char* from, std::size_t n, Upload&& upload, const std::string& what) {
+    ASSERT_EQ(cudaMemset(dev, 0xAB, n + kGuard), cudaSuccess);
+    ASSERT_EQ(upload(dev, from, n, stage, s), cudaSuccess) << what;
+    ASSERT_EQ(cudaStreamSynchronize(s), cudaSuccess);
+    ASSERT_EQ(cudaMemcpy(back.data(), dev, n + kGuard, cudaMemcpyDeviceToHost), cudaSuccess);
+    EXPECT_EQ(std::memcmp(back.data(), from, n), 0) << what;
+    std::size_t beyond = 0;
+    for (std::size_t i = n; i < n + kGuard; ++i) beyond += back[i] != 0xAB;
+    EXPECT_EQ(beyond, 0u) << what;
+  }
+};
+
 using kdet_test::ScopedEnv;
 using kdet_fcl::staging::downloadChunk;
 using kdet_fcl::staging::stagedDownload;
@@ -36,16 +72,10 @@ using kdet_fcl::staging::uploadThreads;
 
 TEST(StagedUpload, EveryByteArrivesAndNothingBeyondForAnyThreadsAndChunks) {
   if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
-  constexpr std::size_t kGuard = 256;
   const std::size_t max_bytes = (std::size_t(3) << 20) + 7;
-  unsigned char* dev = nullptr;
-  ASSERT_EQ(cudaMalloc(&dev, max_bytes + kGuard), cudaSuccess);
-  void* stage = nullptr;
-  ASSERT_EQ(cudaMallocHost(&stage, max_bytes), cudaSuccess);
-  cudaStream_t s = nullptr;
-  ASSERT_EQ(cudaStreamCreate(&s), cudaSuccess);
+  UploadRig rig(max_bytes);
   std::mt19937 rng(7);
-  std::vector<unsigned char> src(max_bytes + 128), back(max_bytes + kGuard);
+  std::vector<unsigned char> src(max_bytes + 128);
   for (auto& b : src) b = static_cast<unsigned char>(rng());
   int cases = 0;
   for (const char* threads : {"1", "2", "3", "8"}) {
@@ -55,32 +85,84 @@ TEST(StagedUpload, EveryByteArrivesAndNothingBeyondForAnyThreadsAndChunks) {
       for (std::size_t bytes : {std::size_t(1), std::size_t(4095), std::size_t(4096),
                                 std::size_t(4097), std::size_t(3 * 4096 + 5),
                                 std::size_t(1) << 20, max_bytes}) {
-        SCOPED_TRACE("threads " + std::string(threads) + ", chunk " +
-                     (chunk ? chunk : "default") + ", bytes " + std::to_string(bytes));
         // The source differs per case (an offset view), so a stale copy would be seen.
         const std::size_t shift = std::size_t(cases++) % 97;
-        ASSERT_EQ(cudaMemset(dev, 0xAB, max_bytes + kGuard), cudaSuccess);
-        const std::size_t n = bytes;  // each case's range
-        ASSERT_EQ(stagedUpload(dev, src.data() + shift, n, stage, s), cudaSuccess);
-        ASSERT_EQ(cudaStreamSynchronize(s), cudaSuccess);
-        ASSERT_EQ(cudaMemcpy(back.data(), dev, n + kGuard, cudaMemcpyDeviceToHost), cudaSuccess);
-        std::size_t wrong = 0;
-        for (std::size_t i = 0; i < n; ++i) wrong += back[i] != src[shift + i];
-        EXPECT_EQ(wrong, 0u);
-        std::size_t beyond = 0;
-        for (std::size_t i = n; i < n + kGuard; ++i) beyond += back[i] != 0xAB;
-        EXPECT_EQ(beyond, 0u);
+        rig.check(src.data() + shift, bytes, stagedUpload,
+                  "threads " + std::string(threads) + ", chunk " + (chunk ? chunk : "default") +
+                      ", bytes " + std::to_string(bytes));
       }
     }
   }
-  EXPECT_EQ(cudaStreamDestroy(s), cudaSuccess);
-  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
-  EXPECT_EQ(cudaFree(dev), cudaSuccess);
 }
 
 TEST(StagedUpload, ZeroBytesTouchNothing) {
   // No CUDA call is made for an empty range, so this holds with or without a device.
   EXPECT_EQ(stagedUpload(nullptr, nullptr, 0, nullptr, nullptr), cudaSuccess);
+}
+
+// The whole pages inside a range (staging::pageInterior), which pinHostMemory registers: page
+// aligned, inside the range, and every whole page of it. Needs no device.
+TEST(PinnedUpload, ThePageInteriorIsEveryWholePageInside) {
+  const std::uintptr_t page = std::uintptr_t(sysconf(_SC_PAGESIZE));
+  ASSERT_GT(page, 0u);
+  const std::uintptr_t base = 1000 * page;  // addresses only, never dereferenced
+  std::size_t with_pages = 0;
+  for (std::uintptr_t off : {std::uintptr_t(0), std::uintptr_t(1), page - 1, page, page + 3})
+    for (std::size_t bytes : {std::size_t(0), std::size_t(1), std::size_t(page - 1),
+                              std::size_t(page), std::size_t(page + 1), std::size_t(2 * page),
+                              std::size_t(3 * page - 2), std::size_t(1) << 20}) {
+      const std::uintptr_t a = base + off;
+      const kdet_fcl::staging::PageInterior in =
+          kdet_fcl::staging::pageInterior(reinterpret_cast<const void*>(a), bytes);
+      const std::string what = "offset " + std::to_string(off) + ", bytes " + std::to_string(bytes);
+      ASSERT_LE(in.begin, in.end) << what;
+      ASSERT_LE(in.end, bytes) << what;
+      // The first whole page starting at or after a, the last whole page ending at or before the
+      // end: none when they do not meet.
+      const std::uintptr_t lo = (a + page - 1) / page * page, hi = (a + bytes) / page * page;
+      if (hi <= lo) {
+        EXPECT_EQ(in.begin, in.end) << what;
+      } else {
+        ++with_pages;
+        EXPECT_EQ(a + in.begin, lo) << what;
+        EXPECT_EQ(a + in.end, hi) << what;
+        EXPECT_EQ((in.end - in.begin) % page, 0u) << what;
+      }
+    }
+  EXPECT_GT(with_pages, 10u);
+}
+
+// pinnedUpload: every byte arrives, nothing beyond, for ranges at every kind of offset from a
+// page and of every size around a page; a range registered once cannot be registered again
+// until its registration is dropped (so a leaked registration would show).
+TEST(PinnedUpload, EveryByteArrivesFromARegisteredRange) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  const std::size_t page = std::size_t(sysconf(_SC_PAGESIZE));
+  const std::size_t max_bytes = (std::size_t(3) << 20) + 7;
+  UploadRig rig(max_bytes);
+  std::vector<unsigned char> src(max_bytes + 2 * page);
+  std::mt19937 rng(13);
+  for (auto& b : src) b = static_cast<unsigned char>(rng());
+  int registered = 0;
+  for (std::size_t off : {std::size_t(0), std::size_t(1), page - 1, page, page + 5})
+    for (std::size_t bytes : {std::size_t(1), page - 1, page, page + 1, 3 * page - 2,
+                              std::size_t(1) << 20, max_bytes}) {
+      const std::string what = "offset " + std::to_string(off) + ", bytes " + std::to_string(bytes);
+      const unsigned char* from = src.data() + off;
+      std::shared_ptr<void> pin = kdet_fcl::staging::pinHostMemory(from, bytes);
+      const kdet_fcl::staging::PageInterior in = kdet_fcl::staging::pageInterior(from, bytes);
+      EXPECT_EQ(pin != nullptr, in.end > in.begin) << what;
+      if (pin) {
+        ++registered;
+        EXPECT_EQ(kdet_fcl::staging::pinHostMemory(from, bytes), nullptr) << what << ": twice";
+      }
+      rig.check(from, bytes, kdet_fcl::staging::pinnedUpload, what);
+      pin.reset();  // unregistered: the same range registers again
+      if (in.end > in.begin) {
+        EXPECT_NE(kdet_fcl::staging::pinHostMemory(from, bytes), nullptr) << what << ": again";
+      }
+    }
+  EXPECT_GT(registered, 10);
 }
 
 /// An 8-byte element, as a triangle pair.

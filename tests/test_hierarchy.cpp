@@ -329,6 +329,67 @@ TEST(HashedMesh, UpdateVerticesKeepsTheBufferAndBoundsInOnePass) {
   checkUpdateVerticesInPlace<double>();
 }
 
+// The registration of the vertex buffer (detail::HostPin, made by the CUDA backend for direct
+// device copies) lives exactly as long as that buffer: updateVertices keeps it (same buffer),
+// setMesh, move assignment and the destructor drop it before the buffer goes, and a move takes
+// it along with the buffer. Each fake registration's release reads the first vertex through the
+// registered address: under AddressSanitizer (the sanitize step of CI) a release after the
+// buffer was freed is a use-after-free.
+TEST(HashedMesh, AVertexBufferRegistrationLivesExactlyAsLongAsTheBuffer) {
+  int released = 0;
+  auto pin = [&](const HashedMesh<double>& h) {
+    const Vec3<double>* at = h.mesh().vertices.data();
+    const Vec3<double> first = at[0];
+    auto release = [&released, first](void* p) {
+      EXPECT_EQ(*static_cast<const Vec3<double>*>(p), first) << "released after a change";
+      ++released;
+    };
+    h.hostPin().set(at, std::shared_ptr<void>(const_cast<Vec3<double>*>(at), release));
+  };
+  const TriangleMesh<double> sphere = makeSphere<double>({0, 0, 0}, 1.0, 16, 8);
+  {
+    HashedMesh<double> h(sphere);
+    EXPECT_EQ(h.hostPin().at(), nullptr);
+    pin(h);
+    EXPECT_TRUE(h.hostPin().pinned());
+    std::vector<Vec3<double>> moved = sphere.vertices;
+    for (auto& p : moved) p.x += 0.5;
+    moved[0] = sphere.vertices[0];  // the release checks the first vertex
+    h.updateVertices(moved);  // same buffer: kept
+    EXPECT_EQ(released, 0);
+    EXPECT_EQ(h.hostPin().at(), h.mesh().vertices.data());
+    EXPECT_THROW(h.updateVertices({{0, 0, 0}}), InvalidInputError);  // refused: kept
+    EXPECT_EQ(released, 0);
+    h.setMesh(makeSphere<double>({0, 0, 0}, 2.0, 8, 4));  // new buffer: dropped first
+    EXPECT_EQ(released, 1);
+    EXPECT_EQ(h.hostPin().at(), nullptr);
+    EXPECT_FALSE(h.hostPin().pinned());
+    pin(h);
+    HashedMesh<double> g(std::move(h));  // the buffer and its registration move together
+    EXPECT_EQ(released, 1);
+    EXPECT_EQ(g.hostPin().at(), g.mesh().vertices.data());
+    EXPECT_EQ(h.hostPin().at(), nullptr);
+    HashedMesh<double> k(sphere);
+    pin(k);
+    k = std::move(g);  // k's own buffer is freed: its registration goes first
+    EXPECT_EQ(released, 2);
+    EXPECT_EQ(k.hostPin().at(), k.mesh().vertices.data());
+    EXPECT_TRUE(k.hostPin().pinned());
+    // A first upload is a record without a registration; a failed registration is a tried
+    // record without a handle: nothing to release for either.
+    HashedMesh<double> f(sphere);
+    f.hostPin().see(f.mesh().vertices.data());
+    EXPECT_EQ(f.hostPin().at(), f.mesh().vertices.data());
+    EXPECT_FALSE(f.hostPin().tried());
+    EXPECT_FALSE(f.hostPin().pinned());
+    f.hostPin().set(f.mesh().vertices.data(), nullptr);
+    EXPECT_TRUE(f.hostPin().tried());
+    EXPECT_FALSE(f.hostPin().pinned());
+    EXPECT_EQ(f.hostPin().at(), f.mesh().vertices.data());
+  }  // k's destructor drops the last registration before its buffer goes
+  EXPECT_EQ(released, 3);
+}
+
 TEST(HashedMesh, PoseChangesDoNotRehashDeformationsDo) {
   HashedMesh<double> hm(makeSphere<double>({0, 0, 0}, 1.0, 16, 8));
   const auto v0 = hm.version();

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "kdet_fcl/detail/aabb.h"
+#include "kdet_fcl/detail/host_pin.h"
 #include "kdet_fcl/triangle_mesh.h"
 #include "kdet_fcl/vec3.h"
 
@@ -111,6 +112,10 @@ class HashedMesh {
   /// Internal: the CPU backend's kept self-query result of this mesh (see QueryResult::kept).
   detail::KeptSelfResult& keptSelf() const { return *kept_self_; }
 
+  /// Internal: the registration of the vertex buffer (mesh().vertices) for direct device copies,
+  /// made by the CUDA backend and dropped here before that buffer can change (see HostPin).
+  detail::HostPin& hostPin() const { return host_pin_; }
+
  private:
   /// After a geometry change: a new version, fresh bounds, the CPU hash marked stale.
   void geometryChanged();
@@ -119,6 +124,10 @@ class HashedMesh {
 
   struct Lazy;  // the lock and the "CPU hash is current" flag (on the heap: movable class)
 
+  // Declared before mesh_: a move assignment drops this mesh's registration before it frees
+  // the vertex buffer the registration is for (members are assigned in declaration order); the
+  // destructor and setMesh drop it first too.
+  mutable detail::HostPin host_pin_;
   TriangleMesh<S> mesh_;
   Transform<S> pose_;
   detail::Aabb<double> bounds_{};
