@@ -491,8 +491,8 @@ __global__ void __launch_bounds__(kBuildBlock)
             if (cur == kEmptySlot) {
               cur = atomicCAS(slots + s, kEmptySlot, key);
               if (cur == kEmptySlot) {  // claimed: a new cell
-                // (one atomic per group of threads inserting together: ncu, H100, 1M cloth,
-                // the kernel took 357 us with one per insert)
+                // (one atomic per group of threads inserting together; ncu, H100, 1M cloth:
+                // the kernel took 357 us with one atomic per thread for its two counters, 308)
                 if (groupIncrement(&info->inserted, cg::coalesced_threads()) >= cell_cap)
                   *sync_flag = 1;
                 found = true;
@@ -1524,8 +1524,9 @@ bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", t
 
 /// Triangles up to which a re-hash without read-back groups its entries by counting. H100, the
 /// counting build against the sort (gpu_bench, same run): the UNC cloth ball (92k) 0.15 against
-/// 0.20-0.24 ms of build; the 1M cloth 0.70 against 0.54 ms, the 10M cloth 8.1 against 5.8 ms
-/// (the table and its atomics leave the L2 cache; see benchmarks/RESULTS-gpu.md).
+/// 0.20-0.24 ms of build; the 1M cloth 0.70 against 0.54 ms, the 10M cloth 8.1 against 5.8 ms.
+/// At 1M, countFillKernel alone takes 308 us (ncu) at an 85 % L2 hit rate: its probes, claims
+/// and counts per entry, not the bandwidth (benchmarks/RESULTS-gpu.md).
 constexpr std::size_t kCountBuildMaxTriangles = 150000;
 
 /// Whether a re-hash without read-back of `nt` triangles groups its entries by counting instead

@@ -1353,13 +1353,13 @@ TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
   // A re-hash without read-back of a mesh of up to 150k triangles whose cells need no size order
   // (the warp scan, the default) groups its entries by counting them in the cell table
   // (countFillKernel) instead of sorting them; KDET_FCL_CUDA_COUNT_BUILD=0 keeps the sort, 1
-  // counts at any size. The order of the cells, and of the
-  // entries inside a cell, then follows the atomics, but the candidates and the pairs must be
-  // the sort's and the CPU's at every frame: self queries (with the cells' pairs on and off),
-  // inter queries both ways and the joint query, on a deforming cloth over a sphere, a crowded
-  // soup (dozens of entries per cell) and a soup of many sizes. The tile scan (cells by size)
-  // keeps the sort. Forced overflows of the cells and entries (KDET_FCL_CUDA_REHASH_CAP) fall
-  // back to a build with read-backs, with the same pairs.
+  // counts at any size. The order of the cells, and of the entries inside a cell, then follows
+  // the atomics, but the candidates and the pairs must be the sort's and the CPU's at every
+  // frame: self queries (with the cells' pairs on and off), inter queries both ways and the
+  // joint query, on a deforming cloth over a sphere, a crowded soup (dozens of entries per cell)
+  // and a soup of many sizes. The tile scan (cells by size) keeps the sort. Forced overflows of
+  // the cells and entries (KDET_FCL_CUDA_REHASH_CAP) fall back to a build with read-backs, with
+  // the same pairs.
   KDET_SKIP_WITHOUT_DEVICE();
   if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
     GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no counting build)";
