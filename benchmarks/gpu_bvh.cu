@@ -9,10 +9,10 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <map>
-#include <memory>
 #include <cstring>
 #include <cub/device/device_radix_sort.cuh>
+#include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -561,21 +561,18 @@ struct GpuBvh<S>::Impl {
     const std::size_t bytes = vertices.size() * sizeof(Vec3<S>);
     if (staged == nullptr) BVH_TRY(cudaEventCreateWithFlags(&staged, cudaEventDisableTiming));
     BVH_TRY(cudaEventSynchronize(staged));
+    bool pinned = false;
     if (stable_sources && bytes >= kdet_fcl::staging::kPinMinBytes &&
         kdet_fcl::staging::pinVerticesOn()) {
       auto it = pins.find(vertices.data());
       if (it == pins.end())
         it = pins.emplace(vertices.data(),
                           kdet_fcl::staging::pinHostMemory(vertices.data(), bytes)).first;
-      if (it->second != nullptr) {
-        BVH_TRY(kdet_fcl::staging::pinnedUpload(v.p, vertices.data(), bytes,
-                                                staging.reserve(bytes), 0));
-        BVH_TRY(cudaEventRecord(staged, 0));
-        return;
-      }
+      pinned = it->second != nullptr;
     }
     void* h = staging.reserve(bytes);
-    BVH_TRY(kdet_fcl::staging::stagedUpload(v.p, vertices.data(), bytes, h, 0));
+    BVH_TRY(pinned ? kdet_fcl::staging::pinnedUpload(v.p, vertices.data(), bytes, h, 0)
+                   : kdet_fcl::staging::stagedUpload(v.p, vertices.data(), bytes, h, 0));
     BVH_TRY(cudaEventRecord(staged, 0));
   }
   void refit() {

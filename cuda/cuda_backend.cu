@@ -408,12 +408,11 @@ __global__ void cellsKernel(std::uint32_t cap, const unsigned long long* __restr
     cell_key[2 * std::size_t(c) + 1] = ck.lo;
   }
   const unsigned long long h = detail::hashCellKey(ck);
-  const unsigned long long val = ((h >> 32) << 32) | c;
-  unsigned int s = static_cast<unsigned int>(
-      (static_cast<unsigned long long>(static_cast<unsigned int>(h)) * slot_count) >> 32);
+  const unsigned long long val = slotValue(h, c);
+  std::uint32_t s = homeSlot(h, slot_count);
   // Keys are unique (one thread per cell), so the first empty slot is ours; slot_count exceeds
   // cell_cap, so there always is one.
-  while (atomicCAS(&slots[s], kEmptySlot, val) != kEmptySlot) s = s + 1 == slot_count ? 0u : s + 1;
+  while (atomicCAS(&slots[s], kEmptySlot, val) != kEmptySlot) s = nextSlot(s, slot_count);
 }
 
 /// Adds one per thread of `g` (threads calling together) to *counter with a single atomic, and
@@ -482,8 +481,7 @@ __global__ void __launch_bounds__(kBuildBlock)
         if (e >= cap || *sync_flag) return;
         const unsigned long long key = compactKey(l, x, y, z, cb);
         const unsigned long long h = detail::hashCellKey(detail::makeCellKey(l, x, y, z));
-        std::uint32_t s = static_cast<std::uint32_t>(
-            (static_cast<unsigned long long>(static_cast<std::uint32_t>(h)) * slot_count) >> 32);
+        std::uint32_t s = homeSlot(h, slot_count);
         bool found = false;
         if (key != kEmptySlot) {
           for (std::uint32_t probe = 0; probe < slot_count; ++probe) {
@@ -503,7 +501,7 @@ __global__ void __launch_bounds__(kBuildBlock)
               found = true;
               break;
             }
-            s = s + 1 == slot_count ? 0u : s + 1;
+            s = nextSlot(s, slot_count);
           }
         }
         if (!found) {
@@ -549,7 +547,7 @@ __global__ void countCellsKernel(BuildInfo* info, unsigned long long* slots,
   cell_count[c] = slot_words[s];
   slot_words[s] = c;
   cell_key[c] = key;
-  slots[s] = ((h >> 32) << 32) | c;
+  slots[s] = slotValue(h, c);
 }
 
 /// One thread per entry of countFillKernel: its place (its cell's first entry, from the scan of
@@ -1536,6 +1534,28 @@ bool countBuildOn(std::size_t nt) {
   return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", nt <= kCountBuildMaxTriangles);
 }
 
+/// Whether a re-hash without read-back of `m` (`nt` triangles) is a counting build: its cells
+/// need no size order, and countBuildOn.
+template <class S>
+bool countsOnRehash(const CachedMesh<S>& m, std::size_t nt) {
+  return !m.size_ordered && countBuildOn(nt);
+}
+
+/// 8-byte words for `k` 64-bit values in the build's scratch, rounded up to 256 bytes (each
+/// scratch array starts on a 256-byte boundary).
+std::size_t wordsFor64(std::size_t k) { return (k + 31) & ~std::size_t(31); }
+/// The same for `k` 32-bit values.
+std::size_t wordsFor32(std::size_t k) { return wordsFor64((k + 1) / 2); }
+
+/// 8-byte words of scratch a counting build of up to `cap` entries, `slot_count` slots and
+/// `cell_cap` cells reserves (buildOnDevice's layout: per entry its slot, rank and value; per
+/// slot its count, then its cell; per cell its count; at least the compact sort's arena).
+std::size_t countBuildWords(std::uint32_t cap, std::uint32_t slot_count, std::uint32_t cell_cap) {
+  const std::size_t e8 = wordsFor64(cap), e4 = wordsFor32(cap);
+  return std::max(2 * e8 + e4,
+                  3 * e4 + wordsFor32(slot_count) + wordsFor32(std::size_t(cell_cap) + 1));
+}
+
 /// Copies one part's vertices to the device. From staging::kPinMinBytes up (unless
 /// KDET_FCL_CUDA_PIN_VERTICES=0) the mesh's vertex buffer is registered as page-locked memory
 /// on its second upload (its whole pages; a buffer uploaded once, as a new mesh per frame, never
@@ -1617,7 +1637,7 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   // A re-hash without read-back whose cells need no size order groups its entries by counting
   // (countFillKernel), not by a sort; its compact keys then need only fit in 64 bits, not in the
   // sort's bits.
-  const bool count_build = async && !m.size_ordered && countBuildOn(nt);
+  const bool count_build = async && countsOnRehash(m, nt);
   m.count_build = count_build;
   if (count_build) ++ctx.profile.count_builds;
   gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? (count_build ? 64 : m.sort_bits) : 0);
@@ -1678,15 +1698,13 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   // The entry-sized scratch of the sort lives in the candidate buffer of the queries, which is
   // idle during a build (same stream, and the context's mutex serialises the calls): no separate
   // memory for it. Each array starts on a 256-byte boundary.
-  const std::size_t e8 = (static_cast<std::size_t>(cap) + 31) & ~std::size_t(31);
-  const std::size_t e4 = ((static_cast<std::size_t>(cap) + 1) / 2 + 31) & ~std::size_t(31);
+  const std::size_t e8 = wordsFor64(cap), e4 = wordsFor32(cap);
   if (count_build) {
     // The counting build (countFillKernel): its scratch in the same idle buffer, in 32-bit
     // arrays: per entry its slot, rank and value; per slot its count, then its cell; per cell its
     // count.
-    auto words = [](std::size_t k) { return ((k + 1) / 2 + 31) & ~std::size_t(31); };
-    const std::size_t s4 = words(m.slot_count), c4 = words(std::size_t(cell_cap) + 1);
-    ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + s4 + c4));
+    const std::size_t s4 = wordsFor32(m.slot_count);
+    ctx.cands.reserve(countBuildWords(cap, m.slot_count, cell_cap));
     std::uint32_t* const at = reinterpret_cast<std::uint32_t*>(ctx.cands.data());
     std::uint32_t* const ent_slot = at;
     std::uint32_t* const ent_rank = at + 2 * e4;
@@ -1868,9 +1886,7 @@ void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   ctx.pairs_sorted.reserve(2 * n4);
   ctx.pairs.reserve(3 * n4 / 2);
   const std::uint32_t cap = rehashCap(m.entry_cap);
-  const std::size_t e8 = (static_cast<std::size_t>(cap) + 31) & ~std::size_t(31);
-  const std::size_t e4 = ((static_cast<std::size_t>(cap) + 1) / 2 + 31) & ~std::size_t(31);
-  ctx.cands.reserve(2 * e8 + e4);
+  ctx.cands.reserve(2 * wordsFor64(cap) + wordsFor32(cap));  // the compact sort's arena
   std::size_t need = 0, b = 0;
   {
     cub::DoubleBuffer<std::uint32_t> sk(nullptr, nullptr), ids(nullptr, nullptr);
@@ -1886,11 +1902,9 @@ void reserveRehash(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     need = std::max(need, b);
     CUDA_TRY(cub::DeviceScan::ExclusiveSum(nullptr, b, p, p, static_cast<int>(cap), s));
     need = std::max(need, b);
-    if (countBuildOn(nt) && !m.size_ordered) {  // the counting build's scratch and scan
+    if (countsOnRehash(m, nt)) {  // the counting build's scratch and scan
       const std::uint32_t cell_cap = rehashCap(m.cell_cap);
-      auto words = [](std::size_t k) { return ((k + 1) / 2 + 31) & ~std::size_t(31); };
-      ctx.cands.reserve(std::max(2 * e8 + e4, 3 * e4 + words(m.slot_count) +
-                                                  words(std::size_t(cell_cap) + 1)));
+      ctx.cands.reserve(countBuildWords(cap, m.slot_count, cell_cap));
       CUDA_TRY(cub::DeviceScan::ExclusiveSum(nullptr, b, p, p, static_cast<int>(cell_cap + 1), s));
       need = std::max(need, b);
     }
@@ -1909,7 +1923,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   const std::uint32_t cap = rehashCap(m.entry_cap), cell_cap = rehashCap(m.cell_cap);
   const std::vector<std::uintptr_t> key = {
       nt, cap, cell_cap, m.slot_count, std::uintptr_t(m.sort_bits), std::uintptr_t(g_num_sms),
-      std::uintptr_t(m.size_ordered), std::uintptr_t(countBuildOn(nt)),
+      std::uintptr_t(m.size_ordered), std::uintptr_t(countsOnRehash(m, nt)),
       std::uintptr_t(ctx.red_ready), std::uintptr_t(upperLevelsFor(m.self_density)),
       reinterpret_cast<std::uintptr_t>(m.upper.data()),
       reinterpret_cast<std::uintptr_t>(m.v.data()), reinterpret_cast<std::uintptr_t>(m.t.data()),
@@ -1953,7 +1967,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     m.pending_entry_cap = cap;
     m.pending_cell_cap = cell_cap;
     ++ctx.profile.rehashes_async;
-    m.count_build = !m.size_ordered && countBuildOn(nt);  // as captured (the graph's key)
+    m.count_build = countsOnRehash(m, nt);  // as captured (the graph's key)
     if (m.count_build) ++ctx.profile.count_builds;
   }
   ++ctx.profile.rehash_graphs;
@@ -2126,8 +2140,8 @@ bool planeFilterOn() { return detail::switchKnob("KDET_FCL_CUDA_PLANE_FILTER", t
 /// tasks in rounds that reuse the candidate buffer, so that the buffer holds about k per
 /// triangle (8 bytes each), not all of them (runQuery). Each extra round costs time (on an H100,
 /// 0.3 ms on those two frames: benchmarks/RESULTS-gpu.md); 14 keeps them under 256 bytes per
-/// triangle with two rounds. Without the knob the limit is at least 2^16 candidates; with it, exactly k per
-/// triangle (tests force many rounds on small meshes).
+/// triangle with two rounds. Without the knob the limit is at least 2^16 candidates; with it,
+/// exactly k per triangle (tests force many rounds on small meshes).
 std::size_t roundCandidateLimit(std::size_t work) {
   constexpr std::uint64_t kUnset = ~std::uint64_t(0);
   const std::uint64_t k =

@@ -177,6 +177,27 @@ __device__ __forceinline__ unsigned long long selfQueryLevels(const HashView<S>&
   return levels & (~known | occupied);
 }
 
+/// The slot where the probe sequence of a cell with hash `hash` starts, in a table of
+/// `slot_count` slots (open addressing, linear probing: see nextSlot).
+__host__ __device__ __forceinline__ std::uint32_t homeSlot(unsigned long long hash,
+                                                           std::uint32_t slot_count) {
+  return static_cast<std::uint32_t>(
+      (static_cast<unsigned long long>(static_cast<std::uint32_t>(hash)) * slot_count) >> 32);
+}
+
+/// The slot after `s` in a probe sequence (wrapping at the table's end).
+__host__ __device__ __forceinline__ std::uint32_t nextSlot(std::uint32_t s,
+                                                           std::uint32_t slot_count) {
+  return s + 1 == slot_count ? 0u : s + 1;
+}
+
+/// A slot's lookup form for cell `c` with hash `hash`: the hash's 32 high bits (the fingerprint
+/// findCell compares first) and the cell index.
+__host__ __device__ __forceinline__ unsigned long long slotValue(unsigned long long hash,
+                                                                 std::uint32_t c) {
+  return ((hash >> 32) << 32) | c;
+}
+
 /// The cell index of cell (L, x, y, z), or -1 when no triangle occupies that cell. The 32 high
 /// hash bits in the slot only skip most mismatches cheaply; a match is confirmed on the full key
 /// (the compact 64-bit key, exact for coordinates inside the bounds, or the 128-bit one), so a
@@ -187,8 +208,7 @@ __device__ __forceinline__ int findCell(const HashView<S>& h, const BuildInfo& i
   const detail::CellKey key = detail::makeCellKey(L, x, y, z);
   const unsigned long long hash = detail::hashCellKey(key);
   const unsigned int fp = static_cast<unsigned int>(hash >> 32);
-  unsigned int i = static_cast<unsigned int>(
-      (static_cast<unsigned long long>(static_cast<unsigned int>(hash)) * h.slot_count) >> 32);
+  unsigned int i = homeSlot(hash, h.slot_count);
   const bool compact = h.key_words == 1;
   const unsigned long long ck = compact ? compactKey(L, x, y, z, info.coord_bits) : 0ull;
   while (true) {
@@ -203,7 +223,7 @@ __device__ __forceinline__ int findCell(const HashView<S>& h, const BuildInfo& i
         return static_cast<int>(c);
       }
     }
-    i = i + 1 == h.slot_count ? 0u : i + 1;
+    i = nextSlot(i, h.slot_count);
   }
 }
 
