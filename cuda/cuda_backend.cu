@@ -478,7 +478,9 @@ __global__ void __launch_bounds__(kBuildBlock)
   for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
     for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
       for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z, ++e) {
-        if (e >= cap || *sync_flag) return;
+        // (need_sync is not polled per entry: those loads share the sector of the counters'
+        // atomics; work done after it is set is thrown away by the fallback anyway)
+        if (e >= cap) return;
         const unsigned long long key = compactKey(l, x, y, z, cb);
         const unsigned long long h = detail::hashCellKey(detail::makeCellKey(l, x, y, z));
         std::uint32_t s = homeSlot(h, slot_count);
