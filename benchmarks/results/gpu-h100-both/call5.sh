@@ -2,6 +2,8 @@
 # Fifth device call (branch countfill-flag; the session's last device minutes): countFillKernel
 # without the per-entry poll of need_sync. A/B against main's numbers: the 1M cloth and the cloth
 # ball with the count forced, then the count test. Outputs straight in $OUT.
+# Session 19: run with timeout_s 185 at the end of the device budget; the build of gpu_bench and
+# test_cuda_query took longer than that, so nothing came back. Give it 600 s (build about 4 min).
 set -u
 cd "$(dirname "$0")/../../.."
 T=$OUT/times.txt
