@@ -452,20 +452,46 @@ __global__ void countClearKernel(unsigned long long* __restrict__ slots, std::ui
     cell_count[k] = 0;
 }
 
-/// Entry e of the counting build (cell (l, x, y, z) of triangle i, `first` its first-cell bits):
-/// finds or claims the slot of its compact key along the probe sequence, counts itself there
-/// and records its slot, rank and value. Returns false (need_sync set) when the key is all ones,
-/// the probe walks the whole table, or the claim makes more cells than `cell_cap`.
-__device__ __forceinline__ bool countEntry(std::uint32_t e, std::uint32_t i, int l, std::int64_t x,
-                                           std::int64_t y, std::int64_t z, std::uint32_t first,
-                                           int cb, BuildInfo* info, unsigned long long* slots,
-                                           std::uint32_t slot_count,
-                                           std::uint32_t* __restrict__ slot_cnt,
-                                           std::uint32_t* __restrict__ ent_slot,
-                                           std::uint32_t* __restrict__ ent_rank,
-                                           std::uint32_t* __restrict__ ent_val,
-                                           std::uint32_t cell_cap) {
-  const unsigned long long key = compactKey(l, x, y, z, cb);
+/// fillKernel's entries (index order, no size sort), one thread per entry e < cap, each counted
+/// in the slot of its cell's compact key (found, or claimed with atomicCAS along the probe
+/// sequence that a lookup walks): per entry its slot, its rank among the slot's entries and its
+/// value (entryValue). Entry e's triangle is the last i with offsets[i] <= e (a binary search
+/// over the scan of the triangles' cell counts), its cell the (e - offsets[i])-th of the
+/// triangle's range in fillKernel's order (x, then y, then z). More distinct cells than
+/// `cell_cap`, a probe past the whole table or a key of all ones set need_sync (the query then
+/// rebuilds with read-backs and reruns). need_sync is read once per thread, not per entry:
+/// polling it shares the sector of the counters' atomics, and work done after it is set is
+/// thrown away by the fallback anyway. ncu, H100, 1M cloth: 308 us with a thread per triangle
+/// looping over its cells and polling need_sync per cell; 147-152 us without the poll; 143-145
+/// us with a thread per entry, whose lanes no longer wait for a triangle of many cells.
+template <class S>
+__global__ void __launch_bounds__(kBuildBlock)
+    countFillKernel(std::uint32_t n, const Aabb<S>* __restrict__ box,
+                    const std::uint8_t* __restrict__ level, const std::uint32_t* __restrict__ offsets,
+                    BuildInfo* info, unsigned long long* slots, std::uint32_t slot_count,
+                    std::uint32_t* __restrict__ slot_cnt, std::uint32_t* __restrict__ ent_slot,
+                    std::uint32_t* __restrict__ ent_rank, std::uint32_t* __restrict__ ent_val,
+                    std::uint32_t cap, std::uint32_t cell_cap) {
+  const std::uint32_t e = blockIdx.x * blockDim.x + threadIdx.x;
+  const std::uint32_t total = __ldg(offsets + n);
+  if (e == 0) info->entries = total;
+  if (e >= cap || e >= total || info->need_sync) return;
+  std::uint32_t i = 0, past = n;  // offsets[i] <= e < offsets[past]
+  while (past - i > 1) {
+    const std::uint32_t mid = i + (past - i) / 2;
+    if (__ldg(offsets + mid) <= e) i = mid;
+    else past = mid;
+  }
+  const int l = level[i];
+  const detail::CellRange r = detail::cellRange(toDoubleBox(box[i]), l, info->grid);
+  const std::uint64_t ny = static_cast<std::uint64_t>(r.hi[1] - r.lo[1] + 1);
+  const std::uint64_t nz = static_cast<std::uint64_t>(r.hi[2] - r.lo[2] + 1);
+  const std::uint64_t local = e - __ldg(offsets + i);
+  const std::uint64_t xy = local / nz;
+  const std::int64_t x = r.lo[0] + static_cast<std::int64_t>(xy / ny);
+  const std::int64_t y = r.lo[1] + static_cast<std::int64_t>(xy % ny);
+  const std::int64_t z = r.lo[2] + static_cast<std::int64_t>(local - xy * nz);
+  const unsigned long long key = compactKey(l, x, y, z, info->coord_bits);
   const unsigned long long h = detail::hashCellKey(detail::makeCellKey(l, x, y, z));
   std::uint32_t s = homeSlot(h, slot_count);
   bool found = false;
@@ -492,90 +518,14 @@ __device__ __forceinline__ bool countEntry(std::uint32_t e, std::uint32_t i, int
   }
   if (!found) {
     info->need_sync = 1;
-    return false;
+    return;
   }
+  const std::uint32_t first =
+      (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u);
   ent_slot[e] = s;
   // The threads of a warp counting in the same slot take one atomic together.
   ent_rank[e] = groupIncrement(slot_cnt + s, cg::labeled_partition(cg::coalesced_threads(), s));
   ent_val[e] = entryValue(i, first);
-  return true;
-}
-
-/// fillKernel's entries (index order, no size sort), each counted in the slot of its cell's
-/// compact key (countEntry): per entry e < cap its slot, its rank among the slot's entries and
-/// its value (entryValue). More distinct cells than `cell_cap`, a probe past the whole table or
-/// a key of all ones set need_sync (the query then rebuilds with read-backs and reruns), and the
-/// thread stops.
-template <class S>
-__global__ void __launch_bounds__(kBuildBlock)
-    countFillKernel(std::uint32_t n, const Aabb<S>* __restrict__ box,
-                    const std::uint8_t* __restrict__ level, const std::uint32_t* __restrict__ offsets,
-                    BuildInfo* info, unsigned long long* slots, std::uint32_t slot_count,
-                    std::uint32_t* __restrict__ slot_cnt, std::uint32_t* __restrict__ ent_slot,
-                    std::uint32_t* __restrict__ ent_rank, std::uint32_t* __restrict__ ent_val,
-                    std::uint32_t cap, std::uint32_t cell_cap) {
-  const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i == 0) info->entries = offsets[n];
-  if (i >= n || info->need_sync) return;
-  const GridParams g = info->grid;
-  const int cb = info->coord_bits;
-  const int l = level[i];
-  const Aabb<double> bd = toDoubleBox(box[i]);
-  const detail::CellRange r = detail::cellRange(bd, l, g);
-  std::uint32_t e = offsets[i];
-  for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
-    for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
-      for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z, ++e) {
-        // (need_sync is not polled per entry: those loads share the sector of the counters'
-        // atomics; work done after it is set is thrown away by the fallback anyway)
-        if (e >= cap) return;
-        const std::uint32_t first =
-            (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u);
-        if (!countEntry(e, i, l, x, y, z, first, cb, info, slots, slot_count, slot_cnt, ent_slot,
-                        ent_rank, ent_val, cell_cap))
-          return;
-      }
-}
-
-/// The same entries as countFillKernel, one thread per entry e < cap: its triangle is the last i
-/// with offsets[i] <= e (a binary search over the scan of the triangles' cell counts), its cell
-/// the (e - offsets[i])-th of the triangle's range in countFillKernel's order (x, then y, then
-/// z). Every lane of a warp probes one entry, where countFillKernel's lanes loop over 1 to 8 or
-/// more cells each.
-template <class S>
-__global__ void __launch_bounds__(kBuildBlock)
-    countEntriesKernel(std::uint32_t n, const Aabb<S>* __restrict__ box,
-                       const std::uint8_t* __restrict__ level,
-                       const std::uint32_t* __restrict__ offsets, BuildInfo* info,
-                       unsigned long long* slots, std::uint32_t slot_count,
-                       std::uint32_t* __restrict__ slot_cnt, std::uint32_t* __restrict__ ent_slot,
-                       std::uint32_t* __restrict__ ent_rank, std::uint32_t* __restrict__ ent_val,
-                       std::uint32_t cap, std::uint32_t cell_cap) {
-  const std::uint32_t e = blockIdx.x * blockDim.x + threadIdx.x;
-  const std::uint32_t total = __ldg(offsets + n);
-  if (e == 0) info->entries = total;
-  if (e >= cap || e >= total || info->need_sync) return;
-  std::uint32_t lo = 0, hi = n;  // offsets[lo] <= e < offsets[hi]
-  while (hi - lo > 1) {
-    const std::uint32_t mid = lo + (hi - lo) / 2;
-    if (__ldg(offsets + mid) <= e) lo = mid;
-    else hi = mid;
-  }
-  const std::uint32_t i = lo;
-  const GridParams g = info->grid;
-  const int l = level[i];
-  const detail::CellRange r = detail::cellRange(toDoubleBox(box[i]), l, g);
-  const std::uint64_t ny = static_cast<std::uint64_t>(r.hi[1] - r.lo[1] + 1);
-  const std::uint64_t nz = static_cast<std::uint64_t>(r.hi[2] - r.lo[2] + 1);
-  const std::uint64_t local = e - __ldg(offsets + i);
-  const std::uint64_t xy = local / nz;
-  const std::int64_t z = r.lo[2] + static_cast<std::int64_t>(local - xy * nz);
-  const std::int64_t y = r.lo[1] + static_cast<std::int64_t>(xy % ny);
-  const std::int64_t x = r.lo[0] + static_cast<std::int64_t>(xy / ny);
-  const std::uint32_t first =
-      (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u);
-  countEntry(e, i, l, x, y, z, first, info->coord_bits, info, slots, slot_count, slot_cnt,
-             ent_slot, ent_rank, ent_val, cell_cap);
 }
 
 /// One thread per slot: a claimed slot becomes a cell (the next index of info->cells), with its
@@ -1589,9 +1539,12 @@ constexpr std::size_t kCountBuildMaxTriangles = 150000;
 
 /// Whether a re-hash without read-back of `nt` triangles groups its entries by counting instead
 /// of sorting them (countFillKernel): KDET_FCL_CUDA_COUNT_BUILD = 0 (never), 1 (always), unset
-/// (up to kCountBuildMaxTriangles). Read at every build.
+/// (up to KDET_FCL_CUDA_COUNT_BUILD_MAX triangles, by default kCountBuildMaxTriangles). Read at
+/// every build.
 bool countBuildOn(std::size_t nt) {
-  return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", nt <= kCountBuildMaxTriangles);
+  const std::uint64_t most = detail::numberKnob("KDET_FCL_CUDA_COUNT_BUILD_MAX", 0, 0xFFFFFFFFull,
+                                                kCountBuildMaxTriangles);
+  return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", nt <= most);
 }
 
 /// Whether a re-hash without read-back of `m` (`nt` triangles) is a counting build: its cells
@@ -1778,15 +1731,10 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
                        kBuildBlock, 0, s>>>(m.slots.data(), m.slot_count, slot_cnt, cell_count,
                                             cell_cap + 1);
     checkLaunch();
-    // (A/B of this branch: KDET_FCL_CUDA_COUNT_FILL=1 one thread per entry, else per triangle)
-    if (detail::switchKnob("KDET_FCL_CUDA_COUNT_FILL", false))
-      countEntriesKernel<S><<<eb, kBuildBlock, 0, s>>>(
-          n, m.box.data(), m.level.data(), offsets, dinfo, m.slots.data(), m.slot_count,
-          slot_cnt, ent_slot, ent_rank, ent_val, cap, cell_cap);
-    else
-      countFillKernel<S><<<blocksFor(nt, kBuildBlock), kBuildBlock, 0, s>>>(
-          n, m.box.data(), m.level.data(), offsets, dinfo, m.slots.data(), m.slot_count,
-          slot_cnt, ent_slot, ent_rank, ent_val, cap, cell_cap);
+    countFillKernel<S><<<eb, kBuildBlock, 0, s>>>(n, m.box.data(), m.level.data(), offsets,
+                                                     dinfo, m.slots.data(), m.slot_count,
+                                                     slot_cnt, ent_slot, ent_rank, ent_val, cap,
+                                                     cell_cap);
     checkLaunch();
     countCellsKernel<<<blocksFor(m.slot_count, kBuildBlock), kBuildBlock, 0, s>>>(
         dinfo, m.slots.data(), m.slot_count, slot_cnt, cell_count, m.cell_key.data(), cell_cap);

@@ -139,7 +139,7 @@ struct QueryProfile {
   int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
   int count_builds = 0;         ///< of the re-hashes without read-back, those that grouped their
                                 ///< entries by counting in the cell table, not by a sort
-                                ///< (meshes of up to 150k triangles;
+                                ///< (meshes of up to KDET_FCL_CUDA_COUNT_BUILD_MAX triangles;
                                 ///< KDET_FCL_CUDA_COUNT_BUILD=0 never, 1 always)
   int pinned_uploads = 0;       ///< vertex uploads copied straight from the mesh's page-locked
                                 ///< buffer (KDET_FCL_CUDA_PIN_VERTICES; arrays of 1 MiB and up)

@@ -105,6 +105,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_FULL_KEYS", on_off, not_on_off},
       {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_BUILD", on_off, not_on_off},
+      {"KDET_FCL_CUDA_COUNT_BUILD_MAX", {"0", "150000", "4294967295"}, {"-1", "4294967296", "1e5"}},
       {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
@@ -1480,20 +1481,26 @@ TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
     }
   }
   {
-    // Above 150k triangles the default is the sort (the counting build is slower there); the
-    // knob forces the count, with the same candidates and pairs. The sphere (small) counts.
+    // Above KDET_FCL_CUDA_COUNT_BUILD_MAX triangles (here 150k; by default
+    // kCountBuildMaxTriangles) the default is the sort; KDET_FCL_CUDA_COUNT_BUILD=1 forces the
+    // count, with the same candidates and pairs. The sphere (small) counts.
+    kdet_test::ScopedEnv most("KDET_FCL_CUDA_COUNT_BUILD_MAX", "150000");
     HashedMesh<S> big(makeDrapedCloth<S>(280, 4, 1, S(0.03), S(1)));  // 156,800 triangles
     const std::vector<TrianglePair> cpu = sorted(intersectMeshes(big, sphere).pairs);
     inter(big, sphere);  // the first build, with read-backs
-    Run by_default, by_count;
+    Run by_default, by_count, by_larger_max;
     {
       kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", nullptr);
       by_default = inter(big, sphere);
+      kdet_test::ScopedEnv larger("KDET_FCL_CUDA_COUNT_BUILD_MAX", "156800");
+      by_larger_max = inter(big, sphere);
     }
     {
       kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "1");
       by_count = inter(big, sphere);
     }
+    EXPECT_EQ(by_larger_max.profile.count_builds, 2);  // (156,800 is at most the maximum)
+    EXPECT_EQ(by_larger_max.pairs, cpu);
     EXPECT_EQ(by_default.profile.rehashes_async, 2);
     EXPECT_EQ(by_default.profile.count_builds, 1);  // the sphere's
     EXPECT_EQ(by_count.profile.rehashes_async, 2);
