@@ -437,7 +437,7 @@ __device__ __forceinline__ T groupIncrement(T* counter, const Group& g) {
 // the cells, and of the entries inside a cell, follows the atomics and changes from run to run;
 // the cells, their entries and every candidate and pair are the same as the sort's (the output
 // is sorted). Meshes of more than kCountBuildMaxTriangles keep the sort (KDET_FCL_CUDA_COUNT_BUILD
-// forces either).
+// forces either, KDET_FCL_CUDA_COUNT_BUILD_MAX moves the limit).
 
 /// Empties the table and zeroes the per-slot counts and the per-cell counts [0, cells_n).
 __global__ void countClearKernel(unsigned long long* __restrict__ slots, std::uint32_t slot_count,
@@ -1531,10 +1531,13 @@ std::uint32_t rehashCap(std::uint32_t cap) {
 bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", true); }
 
 /// Triangles up to which a re-hash without read-back groups its entries by counting. H100, the
-/// counting build against the sort (gpu_bench, same run): the UNC cloth ball (92k) 0.15 against
-/// 0.20-0.24 ms of build; the 1M cloth 0.70 against 0.54 ms, the 10M cloth 8.1 against 5.8 ms.
-/// At 1M, countFillKernel alone takes 308 us (ncu) at an 85 % L2 hit rate: its probes, claims
-/// and counts per entry, not the bandwidth (benchmarks/RESULTS-gpu.md).
+/// counting build (one thread per entry) against the sort, gpu_bench, three rounds in one run
+/// (benchmarks/RESULTS-gpu.md), ms of build and of frame: the UNC cloth ball (92k) 0.15-0.16
+/// against 0.20-0.21 and 0.82-0.83 against 0.86-0.88; the 200k and 250k cloths 0.04 ms less
+/// build and 0.02-0.06 less frame; the cloth ball's two frames as one hash (184k) 0.03-0.06
+/// less build but 0.05-0.09 more frame; the 1M cloth even (0.53-0.61 against 0.54-0.64); the
+/// 10M cloth 5.7 against 4.6 of build, 15.4 against 12.9 of frame. So the rule stays below the
+/// two frames' size.
 constexpr std::size_t kCountBuildMaxTriangles = 150000;
 
 /// Whether a re-hash without read-back of `nt` triangles groups its entries by counting instead
