@@ -1,5 +1,6 @@
 #!/bin/bash
-# First device call of branch countfill-flag (carry .fcl-debs and .gpu-data): build, ctest -L cuda
+# First device call of branch countfill-flag (tree e87af53, the only one with the A/B knob
+# KDET_FCL_CUDA_COUNT_FILL; carry .fcl-debs and .gpu-data): build, ctest -L cuda
 # (also the first device run of main's 82c8047, which the branch is on); the CUDA query tests with
 # the counting build's fill one thread per entry (KDET_FCL_CUDA_COUNT_FILL=1) and memcheck of the
 # count test so; an A/B of the build: the sort, the count per triangle (countFillKernel, no
