@@ -1735,9 +1735,8 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
                                             cell_cap + 1);
     checkLaunch();
     countFillKernel<S><<<eb, kBuildBlock, 0, s>>>(n, m.box.data(), m.level.data(), offsets,
-                                                     dinfo, m.slots.data(), m.slot_count,
-                                                     slot_cnt, ent_slot, ent_rank, ent_val, cap,
-                                                     cell_cap);
+                                                  dinfo, m.slots.data(), m.slot_count, slot_cnt,
+                                                  ent_slot, ent_rank, ent_val, cap, cell_cap);
     checkLaunch();
     countCellsKernel<<<blocksFor(m.slot_count, kBuildBlock), kBuildBlock, 0, s>>>(
         dinfo, m.slots.data(), m.slot_count, slot_cnt, cell_count, m.cell_key.data(), cell_cap);
