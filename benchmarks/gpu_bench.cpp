@@ -117,6 +117,9 @@ struct Row {
   double pairs = 0;  // mean pairs per frame
   double kdet_ms = 0, kdet_wall = 0, kdet_build = 0, kdet_query = 0, kdet_cand_ms = 0,
          kdet_out = 0, kdet_cands = 0;
+  // kDet GPU per frame with the pairs left on the device (intersect*OnDevice); NaN in the joint
+  // form, which has no such entry point
+  double kdet_device_ms = std::nan("");
   double bvh_ms = 0, bvh_wall = 0, bvh_rebuild_ms = 0, bvh_upload = 0, bvh_refit = 0,
          bvh_traverse = 0, bvh_exact = 0, bvh_out = 0, bvh_cands = 0;
   double cpu2_ms = std::nan(""), cpu16_ms = std::nan("");
@@ -224,7 +227,10 @@ Row runScene(const BScene& sc, const Config& cfg) {
   auto H = [&](int o, int f) -> HashedMesh<float>& {
     return *hm[o][std::min<std::size_t>(f, hm[o].size() - 1)];
   };
-  auto kdetGpuFrame = [&](int f, std::vector<Pairs>* sets, cuda::QueryProfile* prof) {
+  // on_dev: the queries leave their pairs in that device buffer (intersect*OnDevice; grown and
+  // asked again when they do not fit); sets then gets them read back. Not for the joint form.
+  auto kdetGpuFrame = [&](int f, std::vector<Pairs>* sets, cuda::QueryProfile* prof,
+                          kdet_bvh::DevicePairBuffer* on_dev) {
     for (int o = 0; o < nobj; ++o)
       if (sc.objs[o].deforming) cuda::markDeformed(H(o, f));
     std::size_t n = 0;
@@ -243,6 +249,28 @@ Row runScene(const BScene& sc, const Config& cfg) {
       n += q.pairs.size();
       if (sets) sets->push_back(std::move(q.pairs));
     };
+    if (on_dev != nullptr) {
+      auto onDevice = [&](auto&& query) {  // query(buffer, capacity) -> DevicePairsResult
+        DevicePairsResult d = query(on_dev->data(), on_dev->capacity());
+        if (d.count > on_dev->capacity()) {
+          on_dev->reserve(d.count);
+          d = query(on_dev->data(), on_dev->capacity());
+        }
+        profiled();
+        n += d.count;
+        if (sets) sets->push_back(on_dev->read(d.count));
+      };
+      for (int o : sc.self)
+        onDevice([&](TrianglePair* p, std::size_t c) {
+          return intersectSelfOnDevice(H(o, f), p, c, opts(Backend::Cuda));
+        });
+      for (const auto& ab : sc.inter)
+        onDevice([&](TrianglePair* p, std::size_t c) {
+          return intersectMeshesOnDevice(H(ab.first, f), H(ab.second, f), p, c,
+                                         opts(Backend::Cuda));
+        });
+      return n;
+    }
     if (joint) {
       AllPairsResult all = intersectAll(H(0, f), H(1, f), opts(Backend::Cuda));
       profiled();
@@ -338,11 +366,13 @@ Row runScene(const BScene& sc, const Config& cfg) {
   // the most rounds one of its queries took: cuda::QueryProfile::rounds).
   cuda::setProfiling(true);
   cuda::QueryProfile first;
-  kdetGpuFrame(0, nullptr, &first);
+  kdetGpuFrame(0, nullptr, &first, nullptr);
   cuda::setProfiling(false);
   r.bytes_per_tri = double(cuda::deviceBytesInUse()) / double(r.triangles);
   std::fprintf(stderr, "[%s] device memory %.0f B/tri (rounds %d): %s\n", sc.id.c_str(),
                r.bytes_per_tri, first.rounds, cuda::deviceMemoryReport().c_str());
+
+  kdet_bvh::DevicePairBuffer dev_pairs;  // kDet's pairs left on the device (not joint)
 
   // ---- correctness pass (untimed): every frame, every method ----
   std::vector<std::unique_ptr<HashedMesh<float>>> cpu2, cpu16;
@@ -355,7 +385,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
   std::vector<std::vector<Pairs>> ref_sets(F);  // kDet GPU's, per frame (for FCL's diff)
   for (int f = 0; f < F; ++f) {
     std::vector<Pairs> g, l, c2, c16;
-    kdetGpuFrame(f, &g, nullptr);
+    kdetGpuFrame(f, &g, nullptr, nullptr);
     bvhFrame(f, false, &l);
     for (const Pairs& p : g) total_pairs += double(p.size());
     auto cmp = [&](const char* who, const std::vector<Pairs>& other) {
@@ -369,6 +399,11 @@ Row runScene(const BScene& sc, const Config& cfg) {
         }
     };
     cmp("LBVH", l);
+    if (!joint) {  // the same queries with their pairs left on the device, read back here
+      std::vector<Pairs> d;
+      kdetGpuFrame(f, &d, nullptr, &dev_pairs);
+      cmp("kDet GPU, pairs on the device,", d);
+    }
     if (do_cpu) {
       cpuFrame(cpu2, 2, f, &c2);
       cpuFrame(cpu16, 16, f, &c16);
@@ -382,19 +417,19 @@ Row runScene(const BScene& sc, const Config& cfg) {
   // ---- kDet GPU ----
   std::fprintf(stderr, "[%s] kDet GPU\n", sc.id.c_str());
   cuda::setProfiling(false);
-  for (int f = 0; f < F; ++f) kdetGpuFrame(f, nullptr, nullptr);  // warm-up
+  for (int f = 0; f < F; ++f) kdetGpuFrame(f, nullptr, nullptr, nullptr);  // warm-up
   std::vector<double> wall, dev, b1, q1, c1, o1, nc;
   for (int k = 0; k < rounds; ++k)
     for (int f = 0; f < F; ++f) {
       const double t0 = nowMs();
-      kdetGpuFrame(f, nullptr, nullptr);
+      kdetGpuFrame(f, nullptr, nullptr, nullptr);
       wall.push_back(nowMs() - t0);
     }
   cuda::setProfiling(true);
   for (int k = 0; k < rounds; ++k)
     for (int f = 0; f < F; ++f) {
       cuda::QueryProfile p;
-      kdetGpuFrame(f, nullptr, &p);
+      kdetGpuFrame(f, nullptr, &p, nullptr);
       dev.push_back(p.total_ms);
       b1.push_back(p.build_ms);
       q1.push_back(p.query_ms);
@@ -402,6 +437,17 @@ Row runScene(const BScene& sc, const Config& cfg) {
       o1.push_back(p.output_ms);
       nc.push_back(double(p.candidates));
     }
+  // The same frames with the pairs left on the device (the buffer was sized by the check above).
+  std::vector<double> on_dev;
+  if (!joint) {
+    for (int k = 0; k < rounds; ++k)
+      for (int f = 0; f < F; ++f) {
+        cuda::QueryProfile p;
+        kdetGpuFrame(f, nullptr, &p, &dev_pairs);
+        on_dev.push_back(p.total_ms);
+      }
+    r.kdet_device_ms = median(on_dev);
+  }
   cuda::setProfiling(false);
   r.kdet_wall = median(wall);
   r.kdet_ms = median(dev);
@@ -730,9 +776,11 @@ int main(int argc, char** argv) {
       continue;
     }
     std::printf(
-        "%-22s tris=%9zu pairs=%10.0f kDet GPU %8.3f ms (wall %8.3f) | LBVH %8.3f ms (wall %8.3f, "
-        "rebuild %8.3f) | x%.2f | CPU2 %9.2f CPU16 %8.2f | FCL(%s) %9.1f | %.0f B/tri | %s | %s\n",
-        r.id.c_str(), r.triangles, r.pairs, r.kdet_ms, r.kdet_wall, r.bvh_ms, r.bvh_wall,
+        "%-22s tris=%9zu pairs=%10.0f kDet GPU %8.3f ms (wall %8.3f, pairs on device %8.3f) | "
+        "LBVH %8.3f ms (wall %8.3f, rebuild %8.3f) | x%.2f | CPU2 %9.2f CPU16 %8.2f | "
+        "FCL(%s) %9.1f | %.0f B/tri | %s | %s\n",
+        r.id.c_str(), r.triangles, r.pairs, r.kdet_ms, r.kdet_wall, r.kdet_device_ms, r.bvh_ms,
+        r.bvh_wall,
         r.bvh_rebuild_ms, r.bvh_ms / r.kdet_ms, r.cpu2_ms, r.cpu16_ms, r.fcl_kind.c_str(),
         r.fcl_ms, r.bytes_per_tri, r.form.c_str(), r.agree ? "agree" : "DISAGREEMENT");
     if (!r.agree) {
@@ -752,7 +800,7 @@ int main(int argc, char** argv) {
            "kdet_query_ms,kdet_candidates_ms,kdet_output_ms,kdet_candidates,lbvh_ms,lbvh_wall_ms,"
            "lbvh_rebuild_ms,lbvh_upload_ms,lbvh_refit_ms,lbvh_traverse_ms,lbvh_exact_ms,"
            "lbvh_output_ms,lbvh_candidates,cpu2_ms,cpu16_ms,fcl_kind,fcl_ms,fcl_refit_ms,"
-           "fcl_pairs,fcl_diff,agree,kdet_bytes_per_triangle,form\n";
+           "fcl_pairs,fcl_diff,agree,kdet_bytes_per_triangle,form,kdet_device_ms\n";
     for (const Row& r : rows)
       out << r.id << ",\"" << r.label << "\"," << r.triangles << ',' << r.frames << ',' << r.pairs
           << ',' << r.kdet_ms << ',' << r.kdet_wall << ',' << r.kdet_build << ',' << r.kdet_query
@@ -761,7 +809,8 @@ int main(int argc, char** argv) {
           << ',' << r.bvh_refit << ',' << r.bvh_traverse << ',' << r.bvh_exact << ','
           << r.bvh_out << ',' << r.bvh_cands << ',' << r.cpu2_ms << ',' << r.cpu16_ms << ','
           << r.fcl_kind << ',' << r.fcl_ms << ',' << r.fcl_refit << ',' << r.fcl_pairs << ','
-          << r.fcl_diff << ',' << r.agree << ',' << r.bytes_per_tri << ',' << r.form << '\n';
+          << r.fcl_diff << ',' << r.agree << ',' << r.bytes_per_tri << ',' << r.form << ','
+          << r.kdet_device_ms << '\n';
   }
   if (!json.empty()) {
     std::ofstream out(json);
@@ -775,7 +824,8 @@ int main(int argc, char** argv) {
           << ", \"kdet_gpu_wall_ms\": " << num(r.kdet_wall)
           << ", \"kdet_build_ms\": " << num(r.kdet_build)
           << ", \"kdet_query_ms\": " << num(r.kdet_query)
-          << ", \"kdet_output_ms\": " << num(r.kdet_out) << ", \"lbvh_ms\": " << num(r.bvh_ms)
+          << ", \"kdet_output_ms\": " << num(r.kdet_out)
+          << ", \"kdet_device_ms\": " << num(r.kdet_device_ms) << ", \"lbvh_ms\": " << num(r.bvh_ms)
           << ", \"lbvh_wall_ms\": " << num(r.bvh_wall)
           << ", \"lbvh_rebuild_ms\": " << num(r.bvh_rebuild_ms)
           << ", \"lbvh_refit_ms\": " << num(r.bvh_refit)

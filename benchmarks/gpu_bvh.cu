@@ -509,6 +509,26 @@ void setInitialCapacity(std::size_t k) {
   s.cand_cap = s.pair_cap = 0;
 }
 
+DevicePairBuffer::~DevicePairBuffer() {
+  if (p_ != nullptr) (void)cudaFree(p_);
+}
+void DevicePairBuffer::reserve(std::size_t n) {
+  if (n <= cap_) return;
+  if (p_ != nullptr) BVH_TRY(cudaFree(p_));
+  p_ = nullptr;
+  cap_ = 0;
+  const std::size_t want = n + n / 8;
+  BVH_TRY(cudaMalloc(reinterpret_cast<void**>(&p_), want * sizeof(kdet_fcl::TrianglePair)));
+  cap_ = want;
+}
+std::vector<kdet_fcl::TrianglePair> DevicePairBuffer::read(std::size_t n) const {
+  if (n > cap_) throw std::runtime_error("gpu_bvh: DevicePairBuffer::read past the capacity");
+  std::vector<kdet_fcl::TrianglePair> v(n);
+  if (n > 0)
+    BVH_TRY(cudaMemcpy(v.data(), p_, n * sizeof(kdet_fcl::TrianglePair), cudaMemcpyDeviceToHost));
+  return v;
+}
+
 // ---- the mesh ----
 
 template <class S>

@@ -59,6 +59,26 @@ std::size_t scratchBytes();
 /// path); 0 restores the default.
 void setInitialCapacity(std::size_t k);
 
+/// A grow-only device buffer of pairs (cudaMalloc'd), for gpu_bench's runs of kDet's queries that
+/// leave their pairs on the device (intersectSelfOnDevice, intersectMeshesOnDevice).
+class DevicePairBuffer {
+ public:
+  DevicePairBuffer() = default;
+  ~DevicePairBuffer();
+  DevicePairBuffer(const DevicePairBuffer&) = delete;
+  DevicePairBuffer& operator=(const DevicePairBuffer&) = delete;
+  /// Room for at least n pairs (the contents are not kept when it grows).
+  void reserve(std::size_t n);
+  kdet_fcl::TrianglePair* data() const { return p_; }
+  std::size_t capacity() const { return cap_; }
+  /// The first n pairs, copied to the host.
+  std::vector<kdet_fcl::TrianglePair> read(std::size_t n) const;
+
+ private:
+  kdet_fcl::TrianglePair* p_ = nullptr;
+  std::size_t cap_ = 0;
+};
+
 template <class S>
 class GpuBvh {
  public:

@@ -2202,6 +2202,15 @@ struct RoundPlan {
   }
 };
 
+/// Where a query's pairs go when the caller keeps them on the device (intersect*OnDevice): at
+/// most `capacity` of them to `ptr` (device memory, checked by checkDevicePairs), and `count`
+/// receives how many the query found.
+struct DeviceOut {
+  TrianglePair* ptr = nullptr;
+  std::size_t capacity = 0;
+  std::size_t count = 0;
+};
+
 /// Runs `launch(cand, survivors, out, round)` (it returns whether the plane filter ran) for each
 /// round of a pass, until every pair fits (overflow: grow, or more rounds; rerun), then sorts the
 /// pairs on the device and copies the first max_pairs (or all) of the sorted order into the
@@ -2220,7 +2229,7 @@ template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
                      std::size_t work, double density, double first_share, bool stages,
                      const QueryOptions& options, std::uint32_t split = 0,
-                     QueryResult* parts = nullptr) {
+                     QueryResult* parts = nullptr, DeviceOut* dev = nullptr) {
   const cudaStream_t s = ctx.stream;
   ctx.cands.reserve(std::max<std::size_t>(std::size_t(1) << 16, 8 * work));
   ctx.pairs.reserve(std::max<std::size_t>(std::size_t(1) << 16, work));
@@ -2311,7 +2320,10 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   QueryResult res;
   std::size_t m = n;
   if (options.max_pairs > 0 && m > options.max_pairs) m = options.max_pairs;
-  if (n > 0) {
+  // The pairs to deliver: all m to the host, or to the caller's device buffer as many as fit.
+  const std::size_t give = dev != nullptr ? std::min(m, dev->capacity) : m;
+  if (dev != nullptr) dev->count = m;
+  if (give > 0) {
     ctx.pairs_sorted.reserve(n);
     cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
     const int bits = a_bits + b_bits + (parts != nullptr ? 2 : 0);
@@ -2320,52 +2332,63 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     });
     const unsigned long long* out = keys.Current();
     unsigned long long* in = keys.Alternate();  // receives the unpacked pairs
-    unpackPairsKernel<<<blocksFor(m, 256), 256, 0, s>>>(
-        static_cast<std::uint32_t>(m), out, b_bits, reinterpret_cast<uint2*>(in), a_bits,
-        parts != nullptr ? ctx.kindCounts() : nullptr);
-    checkLaunch();
-    // The kinds' counts arrive before the first chunk of pairs (same stream), so that the three
-    // results are sized exactly, as a single query's is.
-    if (parts != nullptr)
-      CUDA_TRY(cudaMemcpyAsync(ctx.hostKinds(), ctx.kindCounts(), 2 * sizeof(unsigned long long),
-                               cudaMemcpyDeviceToHost, s));
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
-    // Through pinned memory (a pageable device->host copy runs at a fraction of the bus rate),
-    // in chunks, each appended to the result as soon as it has arrived (staged_upload.h).
-    ctx.readback.reserve(m * sizeof(TrianglePair));
-    auto* const from = reinterpret_cast<const TrianglePair*>(in);
-    auto* const stage = static_cast<TrianglePair*>(ctx.readback.data());
-    if (parts == nullptr) {
-      res.pairs.reserve(m);
-      CUDA_TRY(staging::stagedDownload(from, m, stage, s,
-                                       [&](const TrianglePair* first, std::size_t k) {
-                                         res.pairs.insert(res.pairs.end(), first, first + k);
-                                       }));
+    if (dev != nullptr) {  // straight into the caller's buffer; nothing comes back
+      unpackPairsKernel<<<blocksFor(give, 256), 256, 0, s>>>(
+          static_cast<std::uint32_t>(give), out, b_bits, reinterpret_cast<uint2*>(dev->ptr),
+          a_bits, nullptr);
+      checkLaunch();
     } else {
-      std::size_t at = 0, end0 = 0, end1 = 0;  // the next pair's index; the runs' ends
-      CUDA_TRY(staging::stagedDownload(from, m, stage, s, [&](const TrianglePair* first,
-                                                              std::size_t k) {
-        if (at == 0) {  // the counts arrived before the first chunk
-          const std::size_t k1 = ctx.hostKinds()[0], k2 = ctx.hostKinds()[1];
-          end1 = m - std::min<std::size_t>(m, k2);
-          end0 = end1 - std::min<std::size_t>(end1, k1);
-          parts[0].pairs.reserve(end0);
-          parts[1].pairs.reserve(end1 - end0);
-          parts[2].pairs.reserve(m - end1);
-        }
-        for (std::size_t e = 0; e < k;) {
-          const std::size_t i = at + e;
-          const int kind = i < end0 ? 0 : i < end1 ? 1 : 2;
-          const std::size_t stop = std::min(k, (kind == 0 ? end0 : kind == 1 ? end1 : m) - at);
-          parts[kind].pairs.insert(parts[kind].pairs.end(), first + e, first + stop);
-          e = stop;
-        }
-        at += k;
-      }));
+      unpackPairsKernel<<<blocksFor(m, 256), 256, 0, s>>>(
+          static_cast<std::uint32_t>(m), out, b_bits, reinterpret_cast<uint2*>(in), a_bits,
+          parts != nullptr ? ctx.kindCounts() : nullptr);
+      checkLaunch();
+      // The kinds' counts arrive before the first chunk of pairs (same stream), so that the three
+      // results are sized exactly, as a single query's is.
+      if (parts != nullptr)
+        CUDA_TRY(cudaMemcpyAsync(ctx.hostKinds(), ctx.kindCounts(),
+                                 2 * sizeof(unsigned long long), cudaMemcpyDeviceToHost, s));
+      // Through pinned memory (a pageable device->host copy runs at a fraction of the bus rate),
+      // in chunks, each appended to the result as soon as it has arrived (staged_upload.h).
+      ctx.readback.reserve(m * sizeof(TrianglePair));
+      auto* const from = reinterpret_cast<const TrianglePair*>(in);
+      auto* const stage = static_cast<TrianglePair*>(ctx.readback.data());
+      if (parts == nullptr) {
+        res.pairs.reserve(m);
+        CUDA_TRY(staging::stagedDownload(from, m, stage, s,
+                                         [&](const TrianglePair* first, std::size_t k) {
+                                           res.pairs.insert(res.pairs.end(), first, first + k);
+                                         }));
+      } else {
+        std::size_t at = 0, end0 = 0, end1 = 0;  // the next pair's index; the runs' ends
+        CUDA_TRY(staging::stagedDownload(from, m, stage, s, [&](const TrianglePair* first,
+                                                                std::size_t k) {
+          if (at == 0) {  // the counts arrived before the first chunk
+            const std::size_t k1 = ctx.hostKinds()[0], k2 = ctx.hostKinds()[1];
+            end1 = m - std::min<std::size_t>(m, k2);
+            end0 = end1 - std::min<std::size_t>(end1, k1);
+            parts[0].pairs.reserve(end0);
+            parts[1].pairs.reserve(end1 - end0);
+            parts[2].pairs.reserve(m - end1);
+          }
+          for (std::size_t e = 0; e < k;) {
+            const std::size_t i = at + e;
+            const int kind = i < end0 ? 0 : i < end1 ? 1 : 2;
+            const std::size_t stop =
+                std::min(k, (kind == 0 ? end0 : kind == 1 ? end1 : m) - at);
+            parts[kind].pairs.insert(parts[kind].pairs.end(), first + e, first + stop);
+            e = stop;
+          }
+          at += k;
+        }));
+      }
     }
   }
   ctx.record(3);
-  res.complete = options.max_pairs == 0 || res.pairs.size() < options.max_pairs;
+  // The caller's device buffer is filled when the call returns (its reader may use any stream).
+  if (dev != nullptr) CUDA_TRY(cudaStreamSynchronize(s));
+  res.complete =
+      options.max_pairs == 0 || (dev != nullptr ? m : res.pairs.size()) < options.max_pairs;
   if (ctx.profiling) {
     CUDA_TRY(cudaEventSynchronize(ctx.ev[3]));
     float t01 = 0, t12 = 0, t23 = 0, t03 = 0;
@@ -2635,7 +2658,7 @@ struct PendingBuilds {
 
 template <class S>
 QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
-                      const QueryOptions& options) {
+                      const QueryOptions& options, DeviceOut* dev = nullptr) {
   const std::size_t na = a.numTriangles(), nb = b.numTriangles();
   ctx.profile = QueryProfile{};
   if (na == 0 || nb == 0) return QueryResult{};
@@ -2716,7 +2739,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
                            {sourceOf(&a), sourceOf(&b)}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,
-                             std::max(A.inter_density, B.inter_density), 0.0, false, options);
+                             std::max(A.inter_density, B.inter_density), 0.0, false, options, 0,
+                             nullptr, dev);
   A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
   return res;
 }
@@ -2725,7 +2749,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
 /// one mesh, or (split > 0, `parts`) of two meshes hashed as one, dealt out by runQuery.
 template <class S>
 QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
-                      std::uint32_t split, QueryResult* parts, const QueryOptions& options) {
+                      std::uint32_t split, QueryResult* parts, const QueryOptions& options,
+                      DeviceOut* dev = nullptr) {
   const std::size_t n = M.nt;
   ctx.record(1);
   const cudaStream_t s = ctx.stream;
@@ -2796,7 +2821,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   };
   PendingBuilds<S> pending{ctx, {&M, nullptr}, {src, MeshSource<S>{}}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, M.self_density,
-                             M.self_cell_share, cell_pairs, options, split, parts);
+                             M.self_cell_share, cell_pairs, options, split, parts, dev);
   M.self_density = double(ctx.profile.candidates) / double(n);
   M.self_cell_share = ctx.profile.candidates > 0 ? double(ctx.profile.cell_candidates) /
                                                        double(ctx.profile.candidates)
@@ -2805,12 +2830,15 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
 }
 
 template <class S>
-QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions& options) {
+QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions& options,
+                     DeviceOut* dev = nullptr) {
   const std::size_t n = mesh.numTriangles();
   ctx.profile = QueryProfile{};
   if (n < 2) return QueryResult{};
   ctx.record(0);
   CachedMesh<S>& M = acquire(ctx, mesh);
+  // Pairs for the device are neither taken from nor kept as the mesh's kept (host) result.
+  if (dev != nullptr) return selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options, dev);
   detail::KeptSelfResult::Ticket ticket;
   QueryResult kept;
   if (M.kept_self.find(M.builds, options, &kept, &ticket)) {
@@ -2910,6 +2938,41 @@ auto guarded(F&& f) -> decltype(f(std::declval<Context&>())) {
   }
 }
 
+/// Throws InvalidInputError unless the caller's pair buffer (of `capacity` pairs, > 0) is memory
+/// that the query's kernels may write on device 0: cudaMalloc'd or managed, and 8-byte aligned
+/// (unpackPairsKernel stores each pair as one uint2). Its size cannot be checked: the caller
+/// vouches for `capacity`, as for any CUDA copy.
+void checkDevicePairs(const TrianglePair* out, std::size_t capacity) {
+  if (capacity == 0) return;
+  if (reinterpret_cast<std::uintptr_t>(out) % alignof(uint2) != 0)
+    throw InvalidInputError("the device pair buffer is not 8-byte aligned (cudaMalloc's is)");
+  cudaPointerAttributes at{};
+  const cudaError_t e = cudaPointerGetAttributes(&at, out);
+  if (e != cudaSuccess) {
+    (void)cudaGetLastError();  // not sticky: clear it
+    throw InvalidInputError(std::string("the device pair buffer is not a pointer CUDA knows (") +
+                            cudaGetErrorString(e) + ")");
+  }
+  if ((at.type != cudaMemoryTypeDevice && at.type != cudaMemoryTypeManaged) || at.device != 0)
+    throw InvalidInputError(
+        "the device pair buffer is not device memory of CUDA device 0 (use cudaMalloc or "
+        "cudaMallocManaged; host memory takes intersectSelf/intersectMeshes)");
+}
+
+/// A *OnDevice query: the pair buffer checked, then `run(ctx, &dev)`.
+template <class Run>
+DevicePairsResult onDevice(TrianglePair* out, std::size_t capacity, Run&& run) {
+  return guarded([&](Context& ctx) {
+    checkDevicePairs(out, capacity);
+    DeviceOut dev{out, capacity, 0};
+    const QueryResult r = run(ctx, &dev);
+    DevicePairsResult res;
+    res.count = dev.count;
+    res.complete = r.complete;
+    return res;
+  });
+}
+
 }  // namespace
 
 template <class S>
@@ -2921,6 +2984,23 @@ QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options) {
   return guarded([&](Context& ctx) { return selfImpl(ctx, mesh, options); });
+}
+
+template <class S>
+DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, const QueryOptions& options,
+                                        TrianglePair* out, std::size_t capacity) {
+  return onDevice(out, capacity, [&](Context& ctx, DeviceOut* dev) {
+    return selfImpl(ctx, mesh, options, dev);
+  });
+}
+
+template <class S>
+DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                                          const QueryOptions& options, TrianglePair* out,
+                                          std::size_t capacity) {
+  return onDevice(out, capacity, [&](Context& ctx, DeviceOut* dev) {
+    return interImpl(ctx, a, b, options, dev);
+  });
 }
 
 template <class S>
@@ -3036,6 +3116,16 @@ template QueryResult intersectMeshes(const HashedMesh<double>&, const HashedMesh
                                      const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<float>&, const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<double>&, const QueryOptions&);
+template DevicePairsResult intersectSelfOnDevice(const HashedMesh<float>&, const QueryOptions&,
+                                                 TrianglePair*, std::size_t);
+template DevicePairsResult intersectSelfOnDevice(const HashedMesh<double>&, const QueryOptions&,
+                                                 TrianglePair*, std::size_t);
+template DevicePairsResult intersectMeshesOnDevice(const HashedMesh<float>&,
+                                                   const HashedMesh<float>&, const QueryOptions&,
+                                                   TrianglePair*, std::size_t);
+template DevicePairsResult intersectMeshesOnDevice(const HashedMesh<double>&,
+                                                   const HashedMesh<double>&, const QueryOptions&,
+                                                   TrianglePair*, std::size_t);
 template bool intersectJoint(const HashedMesh<float>&, const HashedMesh<float>&,
                              const QueryOptions&, AllPairsResult*);
 template bool intersectJoint(const HashedMesh<double>&, const HashedMesh<double>&,

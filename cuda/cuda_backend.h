@@ -99,6 +99,18 @@ QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options);
 
+/// intersectSelfOnDevice() on device 0: the pairs written to `out` (device memory, checked), at
+/// most `capacity` of them; the count is of every pair found. Keeps and uses no kept result.
+template <class S>
+DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, const QueryOptions& options,
+                                        TrianglePair* out, std::size_t capacity);
+
+/// intersectMeshesOnDevice() on device 0, as intersectSelfOnDevice.
+template <class S>
+DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                                          const QueryOptions& options, TrianglePair* out,
+                                          std::size_t capacity);
+
 /// intersectAll()'s joint form on device 0. Returns false, doing nothing, unless it applies; the
 /// caller then runs the three queries. It applies when every pair is asked for (max_pairs 0),
 /// both meshes have triangles (together at most 150,000,000) and the inter query would decide on

@@ -22,6 +22,8 @@
 #include "test_util.h"
 
 #if KDET_FCL_TEST_HAVE_CUDA
+#include <cuda_runtime_api.h>
+
 #include "../cuda/cuda_backend.h"
 #endif
 
@@ -75,6 +77,66 @@ class CudaQueryTyped : public ::testing::Test {};
 using Precisions = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(CudaQueryTyped, Precisions);
 
+#if KDET_FCL_TEST_HAVE_CUDA
+/// A device buffer of pairs, allocated by this test's own CUDA runtime (as a user's would be) and
+/// freed at scope exit.
+struct DevicePairBuffer {
+  TrianglePair* p = nullptr;
+  std::size_t n = 0;
+  explicit DevicePairBuffer(std::size_t count) : n(count) {
+    if (n == 0) return;
+    EXPECT_EQ(cudaMalloc(reinterpret_cast<void**>(&p), n * sizeof(TrianglePair)), cudaSuccess);
+    EXPECT_EQ(cudaMemset(p, 0xAB, n * sizeof(TrianglePair)), cudaSuccess);
+  }
+  ~DevicePairBuffer() {
+    if (p != nullptr) cudaFree(p);
+  }
+  DevicePairBuffer(const DevicePairBuffer&) = delete;
+  DevicePairBuffer& operator=(const DevicePairBuffer&) = delete;
+  std::vector<TrianglePair> read() const {
+    std::vector<TrianglePair> v(n);
+    if (n > 0)
+      EXPECT_EQ(cudaMemcpy(v.data(), p, n * sizeof(TrianglePair), cudaMemcpyDeviceToHost),
+                cudaSuccess);
+    return v;
+  }
+};
+
+/// The pattern DevicePairBuffer fills with (no query writes it: its indices exceed any mesh).
+constexpr TrianglePair kUnwritten{0xABABABABu, 0xABABABABu};
+
+/// intersect*OnDevice against the host query of the same backend: the same count and pairs in
+/// the same order, written to the first `count` slots and nothing past them; a buffer of a third
+/// of the pairs gets their first third and the full count; capacity 0 counts only.
+template <class Host, class Device>
+void expectSameOnDevice(const std::string& what, Host&& host, Device&& device) {
+  const QueryResult h = host();
+  const std::size_t n = h.pairs.size();
+  {
+    DevicePairBuffer buf(n + 3);
+    const DevicePairsResult d = device(buf.p, buf.n);
+    EXPECT_EQ(d.count, n) << what;
+    EXPECT_TRUE(d.complete) << what;
+    std::vector<TrianglePair> got = buf.read();
+    for (std::size_t k = n; k < got.size(); ++k)
+      EXPECT_EQ(got[k], kUnwritten) << what << " slot " << k;
+    got.resize(n);
+    EXPECT_EQ(got, h.pairs) << what;
+  }
+  {
+    DevicePairBuffer buf(n / 3 + 1);
+    const DevicePairsResult d = device(buf.p, n / 3);
+    EXPECT_EQ(d.count, n) << what << " (a third)";
+    std::vector<TrianglePair> got = buf.read();
+    EXPECT_EQ(got.back(), kUnwritten) << what << " (a third: the slot after the capacity)";
+    got.resize(n / 3);
+    EXPECT_EQ(got, std::vector<TrianglePair>(h.pairs.begin(), h.pairs.begin() + n / 3))
+        << what << " (a third)";
+  }
+  EXPECT_EQ(device(nullptr, 0).count, n) << what << " (count only)";
+}
+#endif
+
 }  // namespace
 
 TEST(CudaQuery, CudaWithoutDeviceIsATypedError) {
@@ -86,6 +148,112 @@ TEST(CudaQuery, CudaWithoutDeviceIsATypedError) {
   EXPECT_THROW(intersectSelf(a, on(Backend::Cuda)), BackendUnavailableError);
   EXPECT_EQ(resolveBackend(Backend::Auto, 100'000'000), Backend::Cpu);
   EXPECT_NO_THROW(intersectSelf(a, on(Backend::Auto)));
+}
+
+TEST(CudaQuery, PairsOnTheDeviceRefuseTheCpuBackendANullBufferAndNoDevice) {
+  // Checked before any device work, so this runs on every machine (CI has no GPU).
+  HashedMesh<float> a(makeSphere<float>({0, 0, 0}, 1.f, 8, 4));
+  HashedMesh<float> b(makeSphere<float>({0.5f, 0, 0}, 1.f, 8, 4));
+  auto* const some = reinterpret_cast<TrianglePair*>(std::uintptr_t(4096));  // never dereferenced
+  EXPECT_THROW(intersectSelfOnDevice(a, some, 10, on(Backend::Cpu)), InvalidInputError);
+  EXPECT_THROW(intersectMeshesOnDevice(a, b, some, 10, on(Backend::Cpu)), InvalidInputError);
+  EXPECT_THROW(intersectSelfOnDevice(a, nullptr, 3, on(Backend::Cuda)), InvalidInputError);
+  EXPECT_THROW(intersectMeshesOnDevice(a, b, nullptr, 1, on(Backend::Auto)), InvalidInputError);
+  if (cudaDeviceCount() == 0) {
+    EXPECT_THROW(intersectSelfOnDevice(a, nullptr, 0, on(Backend::Cuda)), BackendUnavailableError);
+    EXPECT_THROW(intersectMeshesOnDevice(a, b, nullptr, 0, on(Backend::Auto)),
+                 BackendUnavailableError);
+  }
+}
+
+TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {
+  // intersectSelfOnDevice / intersectMeshesOnDevice write the CUDA backend's pairs into device
+  // memory the caller owns: the host queries' pairs, in their order, on a deforming cloth (self,
+  // and against a sphere posed rigidly), a soup of many sizes, after a forced overflow of the
+  // pair buffers, with max_pairs, and for a rigid mesh whose host self query is kept (the device
+  // one always runs). Host memory, a misaligned pointer and a non-pointer are refused with
+  // InvalidInputError, and the next query works.
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");
+  auto clothAt = [](double t) { return makeDrapedCloth<S>(60, 4, 1, S(0.03), S(t)); };
+  HashedMesh<S> cloth(clothAt(0.5));
+  HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
+  HashedMesh<S> sizes(makeRandomSoup<S>(3001, 1, S(1e-3), S(0.2), 9));
+  auto selfOf = [](const HashedMesh<S>& m, QueryOptions o = on(Backend::Cuda)) {
+    return std::make_pair([&m, o] { return intersectSelf(m, o); },
+                          [&m, o](TrianglePair* p, std::size_t c) {
+                            return intersectSelfOnDevice(m, p, c, o);
+                          });
+  };
+  auto interOf = [](const HashedMesh<S>& a, const HashedMesh<S>& b,
+                    QueryOptions o = on(Backend::Cuda)) {
+    return std::make_pair([&a, &b, o] { return intersectMeshes(a, b, o); },
+                          [&a, &b, o](TrianglePair* p, std::size_t c) {
+                            return intersectMeshesOnDevice(a, b, p, c, o);
+                          });
+  };
+  auto check = [](const std::string& what, auto&& q) {
+    expectSameOnDevice(what, q.first, q.second);
+  };
+  std::mt19937_64 rng(11);
+  for (double t : {0.6, 0.8, 1.0}) {
+    cloth.updateVertices(clothAt(t).vertices);
+    sphere.setPose(kdet_test::randomPose<S>(rng, -0.3, 0.3));
+    const std::string at = " at t = " + std::to_string(t);
+    check("cloth self" + at, selfOf(cloth));
+    check("cloth/sphere" + at, interOf(cloth, sphere));
+    check("sphere/cloth" + at, interOf(sphere, cloth, on(Backend::Auto)));
+  }
+  check("soup of sizes", selfOf(sizes));
+  EXPECT_GT(intersectSelf(cloth, on(Backend::Cuda)).pairs.size(), 100u);
+  EXPECT_GT(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs.size(), 10u);
+  {
+    kdet_test::ScopedEnv small("KDET_FCL_CUDA_PAIR_CAPACITY", "7");  // overflow and rerun
+    check("cloth self, pair buffers of 7", selfOf(cloth));
+    check("cloth/sphere, pair buffers of 7", interOf(cloth, sphere));
+  }
+  {
+    const std::vector<TrianglePair> all = intersectSelf(cloth, on(Backend::Cuda)).pairs;
+    DevicePairBuffer buf(20);
+    const DevicePairsResult d = intersectSelfOnDevice(cloth, buf.p, buf.n, on(Backend::Cuda, 7));
+    EXPECT_EQ(d.count, 7u);
+    EXPECT_FALSE(d.complete);
+    std::vector<TrianglePair> got = buf.read();
+    EXPECT_EQ(got[7], kUnwritten);
+    got.resize(7);
+    EXPECT_EQ(got, std::vector<TrianglePair>(all.begin(), all.begin() + 7));
+  }
+  {
+    // A rigid mesh: its host self query is kept from the second call on; the device query runs.
+    kdet_test::ScopedEnv kept_on("KDET_FCL_CUDA_SELF_CACHE", nullptr);
+    const std::vector<TrianglePair> first = intersectSelf(sizes, on(Backend::Cuda)).pairs;
+    (void)intersectSelf(sizes, on(Backend::Cuda));  // the same geometry: computed and kept
+    EXPECT_TRUE(intersectSelf(sizes, on(Backend::Cuda)).kept);
+    cuda::setProfiling(true);
+    DevicePairBuffer buf(first.size());
+    EXPECT_EQ(intersectSelfOnDevice(sizes, buf.p, buf.n, on(Backend::Cuda)).count, first.size());
+    EXPECT_FALSE(cuda::lastQueryProfile().self_cached);
+    EXPECT_GT(cuda::lastQueryProfile().candidates, 0u);
+    cuda::setProfiling(false);
+    EXPECT_EQ(buf.read(), first);
+    EXPECT_TRUE(intersectSelf(sizes, on(Backend::Cuda)).kept);  // the kept result stays
+  }
+  {
+    std::vector<TrianglePair> host(16);
+    EXPECT_THROW(intersectSelfOnDevice(cloth, host.data(), host.size(), on(Backend::Cuda)),
+                 InvalidInputError);
+    DevicePairBuffer buf(16);
+    auto* const odd = reinterpret_cast<TrianglePair*>(reinterpret_cast<char*>(buf.p) + 4);
+    EXPECT_THROW(intersectSelfOnDevice(cloth, odd, 8, on(Backend::Cuda)), InvalidInputError);
+    auto* const wild = reinterpret_cast<TrianglePair*>(std::uintptr_t(1) << 20);
+    EXPECT_THROW(intersectMeshesOnDevice(cloth, sphere, wild, 8, on(Backend::Cuda)),
+                 InvalidInputError);
+    EXPECT_EQ(buf.read(), std::vector<TrianglePair>(16, kUnwritten));  // nothing written
+    check("cloth self after refusals", selfOf(cloth));
+  }
+#endif
 }
 
 #if KDET_FCL_TEST_HAVE_CUDA

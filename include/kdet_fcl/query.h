@@ -90,6 +90,40 @@ template <class S>
 AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
                             const QueryOptions& options = {});
 
+/// The outcome of a query whose pairs went to device memory (intersectSelfOnDevice,
+/// intersectMeshesOnDevice).
+struct DevicePairsResult {
+  /// The pairs the query found (at most max_pairs when that is set). The first
+  /// min(count, capacity) of them were written to the caller's buffer; when count exceeds the
+  /// capacity the rest were not written: ask again with a buffer of at least `count` pairs.
+  std::size_t count = 0;
+  /// As QueryResult::complete: false when max_pairs pairs were found and more may exist.
+  bool complete = true;
+};
+
+/// For GPU consumers (a simulation whose state lives on the device): intersectSelf on the CUDA
+/// backend, with the pairs written to `device_pairs`, device memory of CUDA device 0 that the
+/// caller owns (cudaMalloc or managed memory), instead of a host vector. The pairs are the same
+/// as intersectSelf's with Backend::Cuda, in the same order (sorted by (a, b)); they are in
+/// place when the call returns (the library's stream has finished), so any stream may read them.
+/// No copy to the host is made, which saves the read-back of the pairs (about 0.05-0.4 ms on the
+/// UNC scenes, benchmarks/RESULTS-gpu.md). A self query here always runs on the device: it
+/// neither returns nor keeps a result kept for unchanged geometry (QueryResult::kept).
+/// `device_pairs` may be null when `capacity` is 0 (the count alone). Throws InvalidInputError
+/// when options.backend is Backend::Cpu (Auto and Cuda both mean the GPU here), when
+/// device_pairs is null with a non-zero capacity or is not device memory, and
+/// BackendUnavailableError without a CUDA build or device, as Backend::Cuda does.
+template <class S>
+DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, TrianglePair* device_pairs,
+                                        std::size_t capacity, const QueryOptions& options = {});
+
+/// intersectMeshes on the CUDA backend with the pairs written to device memory, as
+/// intersectSelfOnDevice.
+template <class S>
+DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                                          TrianglePair* device_pairs, std::size_t capacity,
+                                          const QueryOptions& options = {});
+
 /// Yes/no: do the two meshes have at least one intersecting triangle pair?
 template <class S>
 bool meshesIntersect(const HashedMesh<S>& a, const HashedMesh<S>& b, QueryOptions options = {}) {

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <limits>
 #include <mutex>
+#include <string>
 
 #include "cpu/hierarchical_hash.h"
 #include "cpu/parallel.h"
@@ -346,6 +347,57 @@ AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
   return r;
 }
 
+namespace {
+/// The checks of the device-output queries that need no device: the backend, the buffer.
+void checkDeviceOutput(const QueryOptions& options, const TrianglePair* out,
+                       std::size_t capacity) {
+  if (options.backend == Backend::Cpu)
+    throw InvalidInputError(
+        "pairs on the device need the CUDA backend: QueryOptions::backend is Backend::Cpu "
+        "(use Backend::Cuda or Backend::Auto, or intersectSelf/intersectMeshes for host pairs)");
+  if (out == nullptr && capacity > 0)
+    throw InvalidInputError("device pair buffer is null but its capacity is " +
+                            std::to_string(capacity) + " pairs");
+  (void)resolveBackend(Backend::Cuda);  // BackendUnavailableError without a build or a device
+}
+}  // namespace
+
+template <class S>
+DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, TrianglePair* device_pairs,
+                                        std::size_t capacity, const QueryOptions& options) {
+  checkDeviceOutput(options, device_pairs, capacity);
+#if KDET_FCL_HAVE_CUDA
+  return cuda::intersectSelfOnDevice(mesh, options, device_pairs, capacity);
+#else
+  (void)mesh;
+  throw BackendUnavailableError("kdet_fcl was built without CUDA");
+#endif
+}
+
+template <class S>
+DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                                          TrianglePair* device_pairs, std::size_t capacity,
+                                          const QueryOptions& options) {
+  checkDeviceOutput(options, device_pairs, capacity);
+#if KDET_FCL_HAVE_CUDA
+  return cuda::intersectMeshesOnDevice(a, b, options, device_pairs, capacity);
+#else
+  (void)a;
+  (void)b;
+  throw BackendUnavailableError("kdet_fcl was built without CUDA");
+#endif
+}
+
+template DevicePairsResult intersectSelfOnDevice(const HashedMesh<float>&, TrianglePair*,
+                                                 std::size_t, const QueryOptions&);
+template DevicePairsResult intersectSelfOnDevice(const HashedMesh<double>&, TrianglePair*,
+                                                 std::size_t, const QueryOptions&);
+template DevicePairsResult intersectMeshesOnDevice(const HashedMesh<float>&,
+                                                   const HashedMesh<float>&, TrianglePair*,
+                                                   std::size_t, const QueryOptions&);
+template DevicePairsResult intersectMeshesOnDevice(const HashedMesh<double>&,
+                                                   const HashedMesh<double>&, TrianglePair*,
+                                                   std::size_t, const QueryOptions&);
 template QueryResult intersectMeshes(const HashedMesh<float>&, const HashedMesh<float>&,
                                      const QueryOptions&);
 template QueryResult intersectMeshes(const HashedMesh<double>&, const HashedMesh<double>&,
