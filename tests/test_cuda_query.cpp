@@ -181,15 +181,20 @@ TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {
   HashedMesh<S> cloth(clothAt(0.5));
   HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
   HashedMesh<S> sizes(makeRandomSoup<S>(3001, 1, S(1e-3), S(0.2), 9));
+  // The host query always on the CUDA backend; the device one with `o` (Auto means the GPU).
   auto selfOf = [](const HashedMesh<S>& m, QueryOptions o = on(Backend::Cuda)) {
-    return std::make_pair([&m, o] { return intersectSelf(m, o); },
+    QueryOptions h = o;
+    h.backend = Backend::Cuda;
+    return std::make_pair([&m, h] { return intersectSelf(m, h); },
                           [&m, o](TrianglePair* p, std::size_t c) {
                             return intersectSelfOnDevice(m, p, c, o);
                           });
   };
   auto interOf = [](const HashedMesh<S>& a, const HashedMesh<S>& b,
                     QueryOptions o = on(Backend::Cuda)) {
-    return std::make_pair([&a, &b, o] { return intersectMeshes(a, b, o); },
+    QueryOptions h = o;
+    h.backend = Backend::Cuda;
+    return std::make_pair([&a, &b, h] { return intersectMeshes(a, b, h); },
                           [&a, &b, o](TrianglePair* p, std::size_t c) {
                             return intersectMeshesOnDevice(a, b, p, c, o);
                           });
