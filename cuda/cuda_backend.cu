@@ -2224,7 +2224,9 @@ struct DeviceOut {
 /// sort covers those bits too, so the three kinds come as three runs, whose lengths the unpack
 /// counts; the runs are dealt out as they arrive: parts[0] gets the first mesh's own pairs,
 /// parts[1] the second's and parts[2] those across, each in its own mesh's indices and in (a, b)
-/// order, as the three separate queries give them.
+/// order, as the three separate queries give them. With `dev` (not with `parts`), the sorted
+/// pairs are unpacked straight into the caller's device buffer, as many as fit, dev->count gets
+/// how many there were, nothing is read back, and the call returns once the stream is done.
 template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
                      std::size_t work, double density, double first_share, bool stages,

@@ -21,6 +21,8 @@
 // sets that limit, 0 for none, read at every query), then radix-sorted on the device: the result is sorted by (a, b), so it is
 // deterministic but ordered differently from the CPU backend. With max_pairs = k > 0 the GPU
 // computes all pairs and returns the first k of the sorted order (no early stop on the device).
+// intersectSelfOnDevice/intersectMeshesOnDevice write that sorted order (as much as fits) into
+// the caller's device buffer instead, with no read-back.
 //
 // Thread safety: one mutex serialises all GPU queries of the process.
 //
