@@ -2335,16 +2335,13 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     const unsigned long long* out = keys.Current();
     unsigned long long* in = keys.Alternate();  // receives the unpacked pairs
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
-    if (dev != nullptr) {  // straight into the caller's buffer; nothing comes back
-      unpackPairsKernel<<<blocksFor(give, 256), 256, 0, s>>>(
-          static_cast<std::uint32_t>(give), out, b_bits, reinterpret_cast<uint2*>(dev->ptr),
-          a_bits, nullptr);
-      checkLaunch();
-    } else {
-      unpackPairsKernel<<<blocksFor(m, 256), 256, 0, s>>>(
-          static_cast<std::uint32_t>(m), out, b_bits, reinterpret_cast<uint2*>(in), a_bits,
-          parts != nullptr ? ctx.kindCounts() : nullptr);
-      checkLaunch();
+    // Into the caller's device buffer (nothing comes back), or in place of the unsorted keys.
+    unpackPairsKernel<<<blocksFor(give, 256), 256, 0, s>>>(
+        static_cast<std::uint32_t>(give), out, b_bits,
+        reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : in), a_bits,
+        parts != nullptr ? ctx.kindCounts() : nullptr);
+    checkLaunch();
+    if (dev == nullptr) {
       // The kinds' counts arrive before the first chunk of pairs (same stream), so that the three
       // results are sized exactly, as a single query's is.
       if (parts != nullptr)
@@ -2389,8 +2386,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   ctx.record(3);
   // The caller's device buffer is filled when the call returns (its reader may use any stream).
   if (dev != nullptr) CUDA_TRY(cudaStreamSynchronize(s));
-  res.complete =
-      options.max_pairs == 0 || (dev != nullptr ? m : res.pairs.size()) < options.max_pairs;
+  res.complete = options.max_pairs == 0 || m < options.max_pairs;
   if (ctx.profiling) {
     CUDA_TRY(cudaEventSynchronize(ctx.ev[3]));
     float t01 = 0, t12 = 0, t23 = 0, t03 = 0;
