@@ -117,8 +117,7 @@ struct Row {
   double pairs = 0;  // mean pairs per frame
   double kdet_ms = 0, kdet_wall = 0, kdet_build = 0, kdet_query = 0, kdet_cand_ms = 0,
          kdet_out = 0, kdet_cands = 0;
-  // kDet GPU per frame with the pairs left on the device (intersect*OnDevice); NaN in the joint
-  // form, which has no such entry point
+  // kDet GPU per frame with the pairs left on the device (intersect*OnDevice)
   double kdet_device_ms = std::nan("");
   double bvh_ms = 0, bvh_wall = 0, bvh_rebuild_ms = 0, bvh_upload = 0, bvh_refit = 0,
          bvh_traverse = 0, bvh_exact = 0, bvh_out = 0, bvh_cands = 0;
@@ -228,7 +227,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
     return *hm[o][std::min<std::size_t>(f, hm[o].size() - 1)];
   };
   // on_dev: the queries leave their pairs in that device buffer (intersect*OnDevice; grown and
-  // asked again when they do not fit); sets then gets them read back. Not for the joint form.
+  // asked again when they do not fit); sets then gets them read back.
   auto kdetGpuFrame = [&](int f, std::vector<Pairs>* sets, cuda::QueryProfile* prof,
                           kdet_bvh::DevicePairBuffer* on_dev) {
     for (int o = 0; o < nobj; ++o)
@@ -249,6 +248,27 @@ Row runScene(const BScene& sc, const Config& cfg) {
       n += q.pairs.size();
       if (sets) sets->push_back(std::move(q.pairs));
     };
+    if (on_dev != nullptr && joint) {
+      auto all = [&] {
+        return intersectAllOnDevice(H(0, f), H(1, f), on_dev->data(), on_dev->capacity(),
+                                    opts(Backend::Cuda));
+      };
+      AllDevicePairsResult d = all();
+      if (d.total() > on_dev->capacity()) {
+        on_dev->reserve(d.total());
+        d = all();
+      }
+      profiled();
+      if (sets) {  // the three runs, as intersectAll's three results
+        const Pairs p = on_dev->read(d.total());
+        const auto ea = p.begin() + std::ptrdiff_t(d.self_a.count);
+        const auto eb = ea + std::ptrdiff_t(d.self_b.count);
+        sets->push_back(Pairs(p.begin(), ea));
+        sets->push_back(Pairs(ea, eb));
+        sets->push_back(Pairs(eb, p.end()));
+      }
+      return d.total();
+    }
     if (on_dev != nullptr) {
       auto onDevice = [&](auto&& query) {  // query(buffer, capacity) -> DevicePairsResult
         DevicePairsResult d = query(on_dev->data(), on_dev->capacity());
@@ -372,7 +392,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
   std::fprintf(stderr, "[%s] device memory %.0f B/tri (rounds %d): %s\n", sc.id.c_str(),
                r.bytes_per_tri, first.rounds, cuda::deviceMemoryReport().c_str());
 
-  kdet_bvh::DevicePairBuffer dev_pairs;  // kDet's pairs left on the device (not joint)
+  kdet_bvh::DevicePairBuffer dev_pairs;  // kDet's pairs left on the device
 
   // ---- correctness pass (untimed): every frame, every method ----
   std::vector<std::unique_ptr<HashedMesh<float>>> cpu2, cpu16;
@@ -399,7 +419,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
         }
     };
     cmp("LBVH", l);
-    if (!joint) {  // the same queries with their pairs left on the device, read back here
+    {  // the same queries with their pairs left on the device, read back here
       std::vector<Pairs> d;
       kdetGpuFrame(f, &d, nullptr, &dev_pairs);
       cmp("kDet GPU, pairs on the device,", d);
@@ -439,15 +459,13 @@ Row runScene(const BScene& sc, const Config& cfg) {
     }
   // The same frames with the pairs left on the device (the buffer was sized by the check above).
   std::vector<double> on_dev;
-  if (!joint) {
-    for (int k = 0; k < rounds; ++k)
-      for (int f = 0; f < F; ++f) {
-        cuda::QueryProfile p;
-        kdetGpuFrame(f, nullptr, &p, &dev_pairs);
-        on_dev.push_back(p.total_ms);
-      }
-    r.kdet_device_ms = median(on_dev);
-  }
+  for (int k = 0; k < rounds; ++k)
+    for (int f = 0; f < F; ++f) {
+      cuda::QueryProfile p;
+      kdetGpuFrame(f, nullptr, &p, &dev_pairs);
+      on_dev.push_back(p.total_ms);
+    }
+  r.kdet_device_ms = median(on_dev);
   cuda::setProfiling(false);
   r.kdet_wall = median(wall);
   r.kdet_ms = median(dev);

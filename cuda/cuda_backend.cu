@@ -1189,19 +1189,21 @@ __global__ void shiftIndicesKernel(std::uint32_t n, std::uint32_t by, std::uint3
   if (k < n) t[k] += by;
 }
 
-/// Sorted keys -> TrianglePair layout {a, b} (two 32-bit words), in place of the unsorted keys.
-/// With `kinds` (two meshes hashed as one: the pair's kind in the bits of a from a_bits up,
-/// selfExactKernel), also counts the pairs of kinds 1 and 2 into kinds[0] and kinds[1] and
-/// clears the kind from a: the host knows where each kind's run starts from the counts.
-__global__ void unpackPairsKernel(std::uint32_t m, const unsigned long long* __restrict__ keys,
-                                  int b_bits, uint2* __restrict__ out, int a_bits,
-                                  unsigned long long* kinds) {
+/// Sorted keys -> TrianglePair layout {a, b} (two 32-bit words), the first `limit` of the m
+/// written to `out` (in place of the unsorted keys, or the caller's device buffer). With `kinds`
+/// (two meshes hashed as one: the pair's kind in the bits of a from a_bits up, selfExactKernel),
+/// also counts the pairs of kinds 1 and 2 among all m into kinds[0] and kinds[1] and clears the
+/// kind from a: the host knows where each kind's run starts from the counts.
+__global__ void unpackPairsKernel(std::uint32_t m, std::uint32_t limit,
+                                  const unsigned long long* __restrict__ keys, int b_bits,
+                                  uint2* __restrict__ out, int a_bits, unsigned long long* kinds) {
   const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
   if (k >= m) return;
   const unsigned long long u = keys[k];
   const auto a = static_cast<unsigned int>(u >> b_bits);
   const unsigned int a_mask = kinds != nullptr ? (1u << a_bits) - 1 : ~0u;
-  out[k] = make_uint2(a & a_mask, static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
+  if (k < limit)
+    out[k] = make_uint2(a & a_mask, static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
   if (kinds != nullptr) {
     // The keys are sorted, so a warp's lanes mostly share one kind: one atomic per kind.
     const unsigned int kind = a >> a_bits;
@@ -2209,6 +2211,7 @@ struct DeviceOut {
   TrianglePair* ptr = nullptr;
   std::size_t capacity = 0;
   std::size_t count = 0;
+  std::size_t kinds[2] = {0, 0};  // two meshes hashed as one: the pairs of kinds 1 and 2
 };
 
 /// Runs `launch(cand, survivors, out, round)` (it returns whether the plane filter ran) for each
@@ -2224,9 +2227,10 @@ struct DeviceOut {
 /// sort covers those bits too, so the three kinds come as three runs, whose lengths the unpack
 /// counts; the runs are dealt out as they arrive: parts[0] gets the first mesh's own pairs,
 /// parts[1] the second's and parts[2] those across, each in its own mesh's indices and in (a, b)
-/// order, as the three separate queries give them. With `dev` (not with `parts`), the sorted
+/// order, as the three separate queries give them. With `dev` (instead of `parts`), the sorted
 /// pairs are unpacked straight into the caller's device buffer, as many as fit, dev->count gets
-/// how many there were, nothing is read back, and the call returns once the stream is done.
+/// how many there were (and dev->kinds, with split, the pairs of kinds 1 and 2), nothing else is
+/// read back, and the call returns once the stream is done.
 template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
                      std::size_t work, double density, double first_share, bool stages,
@@ -2323,30 +2327,33 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   std::size_t m = n;
   if (options.max_pairs > 0 && m > options.max_pairs) m = options.max_pairs;
   // The pairs to deliver: all m to the host, or to the caller's device buffer as many as fit.
+  // Two meshes hashed as one (split > 0) carry their kinds, which are counted over all m.
+  const bool kinds = split > 0;
   const std::size_t give = dev != nullptr ? std::min(m, dev->capacity) : m;
   if (dev != nullptr) dev->count = m;
-  if (give > 0) {
+  if (give > 0 || (kinds && m > 0)) {
     ctx.pairs_sorted.reserve(n);
     cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
-    const int bits = a_bits + b_bits + (parts != nullptr ? 2 : 0);
+    const int bits = a_bits + b_bits + (kinds ? 2 : 0);
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
       return cub::DeviceRadixSort::SortKeys(tmp, bytes, keys, static_cast<int>(n), 0, bits, s);
     });
     const unsigned long long* out = keys.Current();
     unsigned long long* in = keys.Alternate();  // receives the unpacked pairs
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
-    // Into the caller's device buffer (nothing comes back), or in place of the unsorted keys.
-    unpackPairsKernel<<<blocksFor(give, 256), 256, 0, s>>>(
-        static_cast<std::uint32_t>(give), out, b_bits,
+    // Into the caller's device buffer, or in place of the unsorted keys; the kinds are counted
+    // over all m, and their counts come back before the first chunk of a host result's pairs
+    // (same stream), so that the three results are sized exactly, as a single query's is.
+    const std::size_t unpack = kinds ? m : give;
+    unpackPairsKernel<<<blocksFor(unpack, 256), 256, 0, s>>>(
+        static_cast<std::uint32_t>(unpack), static_cast<std::uint32_t>(give), out, b_bits,
         reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : in), a_bits,
-        parts != nullptr ? ctx.kindCounts() : nullptr);
+        kinds ? ctx.kindCounts() : nullptr);
     checkLaunch();
+    if (kinds)
+      CUDA_TRY(cudaMemcpyAsync(ctx.hostKinds(), ctx.kindCounts(), 2 * sizeof(unsigned long long),
+                               cudaMemcpyDeviceToHost, s));
     if (dev == nullptr) {
-      // The kinds' counts arrive before the first chunk of pairs (same stream), so that the three
-      // results are sized exactly, as a single query's is.
-      if (parts != nullptr)
-        CUDA_TRY(cudaMemcpyAsync(ctx.hostKinds(), ctx.kindCounts(),
-                                 2 * sizeof(unsigned long long), cudaMemcpyDeviceToHost, s));
       // Through pinned memory (a pageable device->host copy runs at a fraction of the bus rate),
       // in chunks, each appended to the result as soon as it has arrived (staged_upload.h).
       ctx.readback.reserve(m * sizeof(TrianglePair));
@@ -2385,7 +2392,13 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   }
   ctx.record(3);
   // The caller's device buffer is filled when the call returns (its reader may use any stream).
-  if (dev != nullptr) CUDA_TRY(cudaStreamSynchronize(s));
+  if (dev != nullptr) {
+    CUDA_TRY(cudaStreamSynchronize(s));
+    if (kinds && m > 0) {
+      dev->kinds[0] = ctx.hostKinds()[0];
+      dev->kinds[1] = ctx.hostKinds()[1];
+    }
+  }
   res.complete = options.max_pairs == 0 || m < options.max_pairs;
   if (ctx.profiling) {
     CUDA_TRY(cudaEventSynchronize(ctx.ev[3]));
@@ -2869,6 +2882,25 @@ AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<
   return r;
 }
 
+/// jointImpl with the pairs left in the caller's device buffer: the first mesh's own pairs, then
+/// the second's, then those across, one run after another (as many as fit).
+template <class S>
+AllDevicePairsResult jointOnDeviceImpl(Context& ctx, const HashedMesh<S>& a,
+                                       const HashedMesh<S>& b, const QueryOptions& options,
+                                       DeviceOut* dev) {
+  ctx.profile = QueryProfile{};
+  ctx.record(0);
+  CachedMesh<S>& M = acquire(ctx, a, &b);
+  selfQuery(ctx, M, sourceOf(&a, &b), static_cast<std::uint32_t>(a.numTriangles()), nullptr,
+            options, dev);
+  ctx.profile.joint = true;
+  AllDevicePairsResult r;  // (every pair is asked for: each result is complete)
+  r.self_b.count = dev->kinds[0];
+  r.inter.count = dev->kinds[1];
+  r.self_a.count = dev->count - dev->kinds[0] - dev->kinds[1];
+  return r;
+}
+
 /// KDET_FCL_CUDA_JOINT=0 runs the three queries of intersectAll instead of one joint query
 /// (read at every call).
 bool jointOn() { return detail::switchKnob("KDET_FCL_CUDA_JOINT", true); }
@@ -2962,7 +2994,7 @@ template <class Run>
 DevicePairsResult onDevice(TrianglePair* out, std::size_t capacity, Run&& run) {
   return guarded([&](Context& ctx) {
     checkDevicePairs(out, capacity);
-    DeviceOut dev{out, capacity, 0};
+    DeviceOut dev{out, capacity, 0, {0, 0}};
     const QueryResult r = run(ctx, &dev);
     DevicePairsResult res;
     res.count = dev.count;
@@ -3001,18 +3033,37 @@ DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMe
   });
 }
 
+namespace {
+/// Whether one hash for both meshes gives exactly the three queries' pairs: the inter query
+/// would decide on both meshes' own coordinates (poses that map one frame onto the other
+/// exactly), every pair is asked for, and both meshes have triangles (which fit in one entry
+/// together); and KDET_FCL_CUDA_JOINT is not 0.
+template <class S>
+bool jointApplies(const HashedMesh<S>& a, const HashedMesh<S>& b, const QueryOptions& options) {
+  return options.max_pairs == 0 && a.numTriangles() > 0 && b.numTriangles() > 0 &&
+         a.numTriangles() + b.numTriangles() <= kMaxDeviceTriangles &&
+         detail::relativePose(a.pose(), b.pose()).identity && jointOn();
+}
+}  // namespace
+
 template <class S>
 bool intersectJoint(const HashedMesh<S>& a, const HashedMesh<S>& b, const QueryOptions& options,
                     AllPairsResult* out) {
-  // One hash for both when that gives exactly the three queries' pairs: the inter query would
-  // decide on both meshes' own coordinates (poses that map one frame onto the other exactly),
-  // every pair is asked for, and both meshes have triangles (which fit in one entry together).
-  const bool joint = options.max_pairs == 0 && a.numTriangles() > 0 && b.numTriangles() > 0 &&
-                     a.numTriangles() + b.numTriangles() <= kMaxDeviceTriangles &&
-                     detail::relativePose(a.pose(), b.pose()).identity &&
-                     jointOn();
-  if (!joint) return false;
+  if (!jointApplies(a, b, options)) return false;
   *out = guarded([&](Context& ctx) { return jointImpl(ctx, a, b, options); });
+  return true;
+}
+
+template <class S>
+bool intersectJointOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options, TrianglePair* out, std::size_t capacity,
+                            AllDevicePairsResult* result) {
+  if (!jointApplies(a, b, options)) return false;
+  *result = guarded([&](Context& ctx) {
+    checkDevicePairs(out, capacity);
+    DeviceOut dev{out, capacity, 0, {0, 0}};
+    return jointOnDeviceImpl(ctx, a, b, options, &dev);
+  });
   return true;
 }
 
@@ -3124,6 +3175,12 @@ template DevicePairsResult intersectMeshesOnDevice(const HashedMesh<float>&,
 template DevicePairsResult intersectMeshesOnDevice(const HashedMesh<double>&,
                                                    const HashedMesh<double>&, const QueryOptions&,
                                                    TrianglePair*, std::size_t);
+template bool intersectJointOnDevice(const HashedMesh<float>&, const HashedMesh<float>&,
+                                     const QueryOptions&, TrianglePair*, std::size_t,
+                                     AllDevicePairsResult*);
+template bool intersectJointOnDevice(const HashedMesh<double>&, const HashedMesh<double>&,
+                                     const QueryOptions&, TrianglePair*, std::size_t,
+                                     AllDevicePairsResult*);
 template bool intersectJoint(const HashedMesh<float>&, const HashedMesh<float>&,
                              const QueryOptions&, AllPairsResult*);
 template bool intersectJoint(const HashedMesh<double>&, const HashedMesh<double>&,

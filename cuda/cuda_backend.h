@@ -113,6 +113,14 @@ DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMe
                                           const QueryOptions& options, TrianglePair* out,
                                           std::size_t capacity);
 
+/// intersectAllOnDevice()'s joint form on device 0: as intersectJoint (the same conditions,
+/// false and nothing done when they do not hold), with the pairs left in `out` (device memory,
+/// checked): the first mesh's own pairs, then the second's, then those across, as many as fit.
+template <class S>
+bool intersectJointOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options, TrianglePair* out, std::size_t capacity,
+                            AllDevicePairsResult* result);
+
 /// intersectAll()'s joint form on device 0. Returns false, doing nothing, unless it applies; the
 /// caller then runs the three queries. It applies when every pair is asked for (max_pairs 0),
 /// both meshes have triangles (together at most 150,000,000) and the inter query would decide on

@@ -159,11 +159,86 @@ TEST(CudaQuery, PairsOnTheDeviceRefuseTheCpuBackendANullBufferAndNoDevice) {
   EXPECT_THROW(intersectMeshesOnDevice(a, b, some, 10, on(Backend::Cpu)), InvalidInputError);
   EXPECT_THROW(intersectSelfOnDevice(a, nullptr, 3, on(Backend::Cuda)), InvalidInputError);
   EXPECT_THROW(intersectMeshesOnDevice(a, b, nullptr, 1, on(Backend::Auto)), InvalidInputError);
+  EXPECT_THROW(intersectAllOnDevice(a, b, some, 10, on(Backend::Cpu)), InvalidInputError);
+  EXPECT_THROW(intersectAllOnDevice(a, b, nullptr, 2, on(Backend::Cuda)), InvalidInputError);
   if (cudaDeviceCount() == 0) {
+    EXPECT_THROW(intersectAllOnDevice(a, b, nullptr, 0, on(Backend::Cuda)),
+                 BackendUnavailableError);
     EXPECT_THROW(intersectSelfOnDevice(a, nullptr, 0, on(Backend::Cuda)), BackendUnavailableError);
     EXPECT_THROW(intersectMeshesOnDevice(a, b, nullptr, 0, on(Backend::Auto)),
                  BackendUnavailableError);
   }
+}
+
+TYPED_TEST(CudaQueryTyped, AllPairsOnTheDeviceAreIntersectAllsPairsInThreeRuns) {
+  // intersectAllOnDevice leaves intersectAll's three results in the caller's device buffer, one
+  // run after another (self_a, self_b, inter): the joint form (two deforming cloth frames in one
+  // frame of reference, one hash) and the three queries it falls back to (KDET_FCL_CUDA_JOINT=0,
+  // a pose between the meshes, max_pairs); a buffer that ends inside the second run gets the
+  // prefix and every count; capacity 0 counts only.
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");
+  auto clothAt = [](double t) { return makeDrapedCloth<S>(60, 4, 1, S(0.03), S(t)); };
+  HashedMesh<S> a(clothAt(0.5)), b(clothAt(0.55));
+  auto expectAll = [&](const std::string& what, const QueryOptions& o, bool joint) {
+    QueryOptions h = o;
+    h.backend = Backend::Cuda;
+    const AllPairsResult host = intersectAll(a, b, h);
+    std::vector<TrianglePair> runs = host.self_a.pairs;
+    runs.insert(runs.end(), host.self_b.pairs.begin(), host.self_b.pairs.end());
+    runs.insert(runs.end(), host.inter.pairs.begin(), host.inter.pairs.end());
+    const std::size_t na = host.self_a.pairs.size(), nb = host.self_b.pairs.size();
+    auto counts = [&](const AllDevicePairsResult& d, const std::string& w) {
+      EXPECT_EQ(d.self_a.count, na) << w;
+      EXPECT_EQ(d.self_b.count, nb) << w;
+      EXPECT_EQ(d.inter.count, host.inter.pairs.size()) << w;
+      EXPECT_EQ(d.self_a.complete, host.self_a.complete) << w;
+      EXPECT_EQ(d.self_b.complete, host.self_b.complete) << w;
+      EXPECT_EQ(d.inter.complete, host.inter.complete) << w;
+    };
+    {
+      DevicePairBuffer buf(runs.size() + 3);
+      cuda::setProfiling(true);
+      const AllDevicePairsResult d = intersectAllOnDevice(a, b, buf.p, buf.n, o);
+      EXPECT_EQ(cuda::lastQueryProfile().joint, joint) << what;
+      cuda::setProfiling(false);
+      counts(d, what);
+      EXPECT_EQ(d.total(), runs.size()) << what;
+      std::vector<TrianglePair> got = buf.read();
+      for (std::size_t k = runs.size(); k < got.size(); ++k)
+        EXPECT_EQ(got[k], kUnwritten) << what << " slot " << k;
+      got.resize(runs.size());
+      EXPECT_EQ(got, runs) << what;
+    }
+    {
+      const std::size_t cap = na + nb / 2;
+      DevicePairBuffer buf(cap + 1);
+      counts(intersectAllOnDevice(a, b, buf.p, cap, o), what + " (into the second run)");
+      std::vector<TrianglePair> got = buf.read();
+      EXPECT_EQ(got.back(), kUnwritten) << what << " (into the second run)";
+      got.resize(cap);
+      EXPECT_EQ(got, std::vector<TrianglePair>(runs.begin(), runs.begin() + cap))
+          << what << " (into the second run)";
+    }
+    counts(intersectAllOnDevice(a, b, nullptr, 0, o), what + " (count only)");
+    return runs.size();
+  };
+  for (double t : {0.7, 1.0}) {
+    a.updateVertices(clothAt(t).vertices);
+    b.updateVertices(clothAt(t + 0.05).vertices);
+    const std::string at = " at t = " + std::to_string(t);
+    EXPECT_GT(expectAll("joint" + at, on(Backend::Cuda), true), 100u);
+    {
+      kdet_test::ScopedEnv three("KDET_FCL_CUDA_JOINT", "0");
+      expectAll("three queries (knob)" + at, on(Backend::Auto), false);
+    }
+    expectAll("three queries (max_pairs 5)" + at, on(Backend::Cuda, 5), false);
+  }
+  b.setPose(makeTransform<S>({0, 0, 1}, S(0.3), {S(0.1), 0, 0}));
+  expectAll("three queries (posed)", on(Backend::Cuda), false);
+#endif
 }
 
 TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {

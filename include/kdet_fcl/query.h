@@ -126,6 +126,27 @@ DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMe
                                           TrianglePair* device_pairs, std::size_t capacity,
                                           const QueryOptions& options = {});
 
+/// The outcome of intersectAllOnDevice: the three results' counts, their pairs one run after
+/// another in the caller's buffer.
+struct AllDevicePairsResult {
+  DevicePairsResult self_a;  ///< intersectSelf(a): the buffer's first self_a.count pairs
+  DevicePairsResult self_b;  ///< intersectSelf(b): the next self_b.count
+  DevicePairsResult inter;   ///< intersectMeshes(a, b): the last inter.count
+  /// Pairs of all three: the buffer holds the first min(total(), capacity) of the runs.
+  std::size_t total() const { return self_a.count + self_b.count + inter.count; }
+};
+
+/// intersectAll with the pairs written to device memory, as intersectSelfOnDevice: the three
+/// results' pairs, each in its own order and indices as intersectAll returns them, one run after
+/// another (self_a, self_b, inter); a buffer smaller than total() gets the first `capacity`
+/// pairs of those runs. When intersectAll would hash both meshes as one (see cuda_backend.h),
+/// so does this; otherwise it runs the three device queries into the three places. Errors as
+/// intersectSelfOnDevice.
+template <class S>
+AllDevicePairsResult intersectAllOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                                          TrianglePair* device_pairs, std::size_t capacity,
+                                          const QueryOptions& options = {});
+
 /// Yes/no: do the two meshes have at least one intersecting triangle pair?
 template <class S>
 bool meshesIntersect(const HashedMesh<S>& a, const HashedMesh<S>& b, QueryOptions options = {}) {

@@ -388,6 +388,39 @@ DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMe
 #endif
 }
 
+template <class S>
+AllDevicePairsResult intersectAllOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                                          TrianglePair* device_pairs, std::size_t capacity,
+                                          const QueryOptions& options) {
+  checkDeviceOutput(options, device_pairs, capacity);
+#if KDET_FCL_HAVE_CUDA
+  AllDevicePairsResult r;
+  if (cuda::intersectJointOnDevice(a, b, options, device_pairs, capacity, &r)) return r;
+  // The three queries, each into the rest of the buffer after the runs before it.
+  std::size_t used = 0;
+  auto place = [&](DevicePairsResult q) {
+    used += q.count;
+    return q;
+  };
+  auto at = [&] { return used < capacity ? device_pairs + used : nullptr; };
+  auto room = [&] { return used < capacity ? capacity - used : std::size_t(0); };
+  r.self_a = place(cuda::intersectSelfOnDevice(a, options, at(), room()));
+  r.self_b = place(cuda::intersectSelfOnDevice(b, options, at(), room()));
+  r.inter = place(cuda::intersectMeshesOnDevice(a, b, options, at(), room()));
+  return r;
+#else
+  (void)a;
+  (void)b;
+  throw BackendUnavailableError("kdet_fcl was built without CUDA");
+#endif
+}
+
+template AllDevicePairsResult intersectAllOnDevice(const HashedMesh<float>&,
+                                                   const HashedMesh<float>&, TrianglePair*,
+                                                   std::size_t, const QueryOptions&);
+template AllDevicePairsResult intersectAllOnDevice(const HashedMesh<double>&,
+                                                   const HashedMesh<double>&, TrianglePair*,
+                                                   std::size_t, const QueryOptions&);
 template DevicePairsResult intersectSelfOnDevice(const HashedMesh<float>&, TrianglePair*,
                                                  std::size_t, const QueryOptions&);
 template DevicePairsResult intersectSelfOnDevice(const HashedMesh<double>&, TrianglePair*,
