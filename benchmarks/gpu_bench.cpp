@@ -259,6 +259,13 @@ Row runScene(const BScene& sc, const Config& cfg) {
         d = all();
       }
       profiled();
+      if (prof && !cuda::lastQueryProfile().joint) {
+        static bool warned = false;
+        if (!warned)
+          std::fprintf(stderr, "warning: intersectAllOnDevice did not run joint; device times "
+                               "cover only its last query (use --joint none)\n");
+        warned = true;
+      }
       if (sets) {  // the three runs, as intersectAll's three results
         const Pairs p = on_dev->read(d.total());
         const auto ea = p.begin() + std::ptrdiff_t(d.self_a.count);

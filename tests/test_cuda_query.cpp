@@ -173,9 +173,10 @@ TEST(CudaQuery, PairsOnTheDeviceRefuseTheCpuBackendANullBufferAndNoDevice) {
 TYPED_TEST(CudaQueryTyped, AllPairsOnTheDeviceAreIntersectAllsPairsInThreeRuns) {
   // intersectAllOnDevice leaves intersectAll's three results in the caller's device buffer, one
   // run after another (self_a, self_b, inter): the joint form (two deforming cloth frames in one
-  // frame of reference, one hash) and the three queries it falls back to (KDET_FCL_CUDA_JOINT=0,
-  // a pose between the meshes, max_pairs); a buffer that ends inside the second run gets the
-  // prefix and every count; capacity 0 counts only.
+  // frame of reference, one hash; also after a forced overflow of the pair buffers) and the three
+  // queries it falls back to (KDET_FCL_CUDA_JOINT=0, a pose between the meshes, max_pairs); a
+  // buffer that ends inside the second run gets the prefix and every count; capacity 0 counts
+  // only. Each call's form is checked in the profile.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -215,14 +216,20 @@ TYPED_TEST(CudaQueryTyped, AllPairsOnTheDeviceAreIntersectAllsPairsInThreeRuns) 
     {
       const std::size_t cap = na + nb / 2;
       DevicePairBuffer buf(cap + 1);
+      cuda::setProfiling(true);
       counts(intersectAllOnDevice(a, b, buf.p, cap, o), what + " (into the second run)");
+      EXPECT_EQ(cuda::lastQueryProfile().joint, joint) << what << " (into the second run)";
+      cuda::setProfiling(false);
       std::vector<TrianglePair> got = buf.read();
       EXPECT_EQ(got.back(), kUnwritten) << what << " (into the second run)";
       got.resize(cap);
       EXPECT_EQ(got, std::vector<TrianglePair>(runs.begin(), runs.begin() + cap))
           << what << " (into the second run)";
     }
+    cuda::setProfiling(true);
     counts(intersectAllOnDevice(a, b, nullptr, 0, o), what + " (count only)");
+    EXPECT_EQ(cuda::lastQueryProfile().joint, joint) << what << " (count only)";
+    cuda::setProfiling(false);
     return runs.size();
   };
   for (double t : {0.7, 1.0}) {
@@ -235,6 +242,10 @@ TYPED_TEST(CudaQueryTyped, AllPairsOnTheDeviceAreIntersectAllsPairsInThreeRuns) 
       expectAll("three queries (knob)" + at, on(Backend::Auto), false);
     }
     expectAll("three queries (max_pairs 5)" + at, on(Backend::Cuda, 5), false);
+    {
+      kdet_test::ScopedEnv small("KDET_FCL_CUDA_PAIR_CAPACITY", "7");  // overflow and rerun
+      expectAll("joint, pair buffers of 7" + at, on(Backend::Cuda), true);
+    }
   }
   b.setPose(makeTransform<S>({0, 0, 1}, S(0.3), {S(0.1), 0, 0}));
   expectAll("three queries (posed)", on(Backend::Cuda), false);

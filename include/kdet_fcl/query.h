@@ -137,11 +137,11 @@ struct AllDevicePairsResult {
 };
 
 /// intersectAll with the pairs written to device memory, as intersectSelfOnDevice: the three
-/// results' pairs, each in its own order and indices as intersectAll returns them, one run after
-/// another (self_a, self_b, inter); a buffer smaller than total() gets the first `capacity`
-/// pairs of those runs. When intersectAll would hash both meshes as one (see cuda_backend.h),
-/// so does this; otherwise it runs the three device queries into the three places. Errors as
-/// intersectSelfOnDevice.
+/// results' pairs, each in its own order and indices as intersectAll with Backend::Cuda returns
+/// them, one run after another (self_a, self_b, inter); a buffer smaller than total() gets the
+/// first `capacity` pairs of those runs. When intersectAll on the CUDA backend would hash both
+/// meshes as one (see cuda_backend.h), so does this; otherwise it runs the three device queries
+/// into the three places. Errors as intersectSelfOnDevice.
 template <class S>
 AllDevicePairsResult intersectAllOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
                                           TrianglePair* device_pairs, std::size_t capacity,
