@@ -2840,6 +2840,17 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   return res;
 }
 
+/// Host pairs into the caller's device buffer (as many as fit), as runQuery leaves a query's
+/// own: dev->count is how many there are, and the copy is done when this returns.
+void copyToDevice(Context& ctx, const std::vector<TrianglePair>& pairs, DeviceOut* dev) {
+  dev->count = pairs.size();
+  const std::size_t give = std::min(pairs.size(), dev->capacity);
+  if (give == 0) return;
+  CUDA_TRY(cudaMemcpyAsync(dev->ptr, pairs.data(), give * sizeof(TrianglePair),
+                           cudaMemcpyHostToDevice, ctx.stream));
+  CUDA_TRY(cudaStreamSynchronize(ctx.stream));
+}
+
 template <class S>
 QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions& options,
                      DeviceOut* dev = nullptr) {
@@ -2848,18 +2859,23 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   if (n < 2) return QueryResult{};
   ctx.record(0);
   CachedMesh<S>& M = acquire(ctx, mesh);
-  // Pairs for the device are neither taken from nor kept as the mesh's kept (host) result.
-  if (dev != nullptr) return selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options, dev);
+  // One kept result (host pairs) answers both forms. With `dev`, a kept result is copied into
+  // the caller's buffer; the query that keeps one reads its pairs back once and copies them
+  // there; any other runs straight into the buffer.
   detail::KeptSelfResult::Ticket ticket;
   QueryResult kept;
   if (M.kept_self.find(M.builds, options, &kept, &ticket)) {
-    ctx.profile = QueryProfile{};  // nothing ran on the device
+    ctx.profile = QueryProfile{};  // nothing ran on the device but this copy
     ctx.profile.self_cached = true;
     ctx.profile.pairs = kept.pairs.size();
+    if (dev != nullptr) copyToDevice(ctx, kept.pairs, dev);
     return kept;
   }
+  if (dev != nullptr && !ticket.keep)
+    return selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options, dev);
   QueryResult res = selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options);
   M.kept_self.offer(ticket, options, res);
+  if (dev != nullptr) copyToDevice(ctx, res.pairs, dev);
   return res;
 }
 
@@ -2999,6 +3015,7 @@ DevicePairsResult onDevice(TrianglePair* out, std::size_t capacity, Run&& run) {
     DevicePairsResult res;
     res.count = dev.count;
     res.complete = r.complete;
+    res.kept = r.kept;
     return res;
   });
 }

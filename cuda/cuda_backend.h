@@ -102,7 +102,9 @@ template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options);
 
 /// intersectSelfOnDevice() on device 0: the pairs written to `out` (device memory, checked), at
-/// most `capacity` of them; the count is of every pair found. Keeps and uses no kept result.
+/// most `capacity` of them; the count is of every pair found. It shares the mesh's kept result
+/// with intersectSelf (copied into `out` when it answers; the query that keeps one reads its
+/// pairs back).
 template <class S>
 DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, const QueryOptions& options,
                                         TrianglePair* out, std::size_t capacity);

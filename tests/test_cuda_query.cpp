@@ -256,8 +256,8 @@ TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {
   // intersectSelfOnDevice / intersectMeshesOnDevice write the CUDA backend's pairs into device
   // memory the caller owns: the host queries' pairs, in their order, on a deforming cloth (self,
   // and against a sphere posed rigidly), a soup of many sizes, after a forced overflow of the
-  // pair buffers, with max_pairs, and for a rigid mesh whose host self query is kept (the device
-  // one always runs). Host memory, a misaligned pointer and a non-pointer are refused with
+  // pair buffers, with max_pairs, and for a rigid mesh whose self query is kept (one kept result
+  // answers both forms). Host memory, a misaligned pointer and a non-pointer are refused with
   // InvalidInputError, and the next query works.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
@@ -317,18 +317,46 @@ TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {
     EXPECT_EQ(got, std::vector<TrianglePair>(all.begin(), all.begin() + 7));
   }
   {
-    // A rigid mesh: its host self query is kept from the second call on; the device query runs.
+    // A rigid mesh: one kept result answers both forms. A device query that sees the geometry of
+    // the previous self query runs (reading its pairs back once) and keeps the result; the host
+    // query is then answered from it, and so are later device queries, whose buffer gets the
+    // kept pairs (a prefix when it is smaller; only the count with capacity 0).
     kdet_test::ScopedEnv kept_on("KDET_FCL_CUDA_SELF_CACHE", nullptr);
     const std::vector<TrianglePair> first = intersectSelf(sizes, on(Backend::Cuda)).pairs;
-    (void)intersectSelf(sizes, on(Backend::Cuda));  // the same geometry: computed and kept
-    EXPECT_TRUE(intersectSelf(sizes, on(Backend::Cuda)).kept);
+    ASSERT_GT(first.size(), 10u);
     cuda::setProfiling(true);
-    DevicePairBuffer buf(first.size());
-    EXPECT_EQ(intersectSelfOnDevice(sizes, buf.p, buf.n, on(Backend::Cuda)).count, first.size());
-    EXPECT_FALSE(cuda::lastQueryProfile().self_cached);
-    EXPECT_GT(cuda::lastQueryProfile().candidates, 0u);
+    {
+      DevicePairBuffer buf(first.size() + 1);
+      const DevicePairsResult d = intersectSelfOnDevice(sizes, buf.p, buf.n, on(Backend::Cuda));
+      EXPECT_FALSE(d.kept);
+      EXPECT_FALSE(cuda::lastQueryProfile().self_cached);
+      EXPECT_GT(cuda::lastQueryProfile().candidates, 0u);  // it ran
+      EXPECT_EQ(d.count, first.size());
+      std::vector<TrianglePair> got = buf.read();
+      EXPECT_EQ(got.back(), kUnwritten);
+      got.pop_back();
+      EXPECT_EQ(got, first);
+    }
+    EXPECT_TRUE(intersectSelf(sizes, on(Backend::Cuda)).kept);  // kept by the device query
+    for (std::size_t cap : {first.size() + 1, std::size_t(4), std::size_t(0)}) {
+      DevicePairBuffer buf(cap == 0 ? 0 : cap + 1);
+      const DevicePairsResult d =
+          intersectSelfOnDevice(sizes, cap == 0 ? nullptr : buf.p, cap, on(Backend::Cuda));
+      const std::string what = "kept, capacity " + std::to_string(cap);
+      EXPECT_TRUE(d.kept) << what;
+      EXPECT_TRUE(d.complete) << what;
+      EXPECT_TRUE(cuda::lastQueryProfile().self_cached) << what;
+      EXPECT_EQ(cuda::lastQueryProfile().candidates, 0u) << what;  // nothing ran
+      EXPECT_EQ(d.count, first.size()) << what;
+      if (cap == 0) continue;
+      std::vector<TrianglePair> got = buf.read();
+      const std::size_t wrote = std::min(cap, first.size());
+      for (std::size_t k = wrote; k < got.size(); ++k)
+        EXPECT_EQ(got[k], kUnwritten) << what << " slot " << k;
+      got.resize(wrote);
+      EXPECT_EQ(got, std::vector<TrianglePair>(first.begin(), first.begin() + wrote)) << what;
+    }
     cuda::setProfiling(false);
-    EXPECT_EQ(buf.read(), first);
     EXPECT_TRUE(intersectSelf(sizes, on(Backend::Cuda)).kept);  // the kept result stays
   }
   {
@@ -686,6 +714,28 @@ TEST(CudaQuery, SelfResultOfAnUnchangedMeshIsKeptAndDroppedOnAnyChange) {
   EXPECT_FALSE(gpuSelf("markDeformed").second);
   EXPECT_FALSE(gpuSelf("after markDeformed, computed and kept").second);
   EXPECT_TRUE(gpuSelf("after markDeformed, kept").second);
+
+  // The same scenario in the device form (intersectSelfOnDevice), on a fresh mesh: it keeps and
+  // is answered by the rule of the host form, its buffer holding the same pairs either way.
+  HashedMesh<double> soup2(makeRandomSoup<double>(1500, 6.0, 0.3, 1.2, 17));
+  auto deviceSelf = [&](const std::string& what, std::size_t max_pairs = 0,
+                        Predicate pred = Predicate::Exact) {
+    const QueryResult cpu = intersectSelf(soup2, on(Backend::Cpu, 0, pred));
+    std::vector<TrianglePair> want = sorted(cpu.pairs);
+    if (max_pairs > 0 && want.size() > max_pairs) want.resize(max_pairs);
+    DevicePairBuffer buf(want.size() + 1);
+    const DevicePairsResult d =
+        intersectSelfOnDevice(soup2, buf.p, buf.n, on(Backend::Cuda, max_pairs, pred));
+    EXPECT_EQ(d.kept, cuda::lastQueryProfile().self_cached) << what;
+    EXPECT_EQ(d.count, want.size()) << what;
+    EXPECT_EQ(d.complete, max_pairs == 0 || d.count < max_pairs) << what;
+    std::vector<TrianglePair> got = buf.read();
+    EXPECT_EQ(got.back(), kUnwritten) << what;
+    got.pop_back();
+    EXPECT_EQ(got, want) << what;
+    return std::make_pair(got, d.kept);
+  };
+  kdet_test::runKeptSelfScenario(soup2, Backend::Cuda, "KDET_FCL_CUDA_SELF_CACHE", deviceSelf);
   cuda::setProfiling(false);
 #endif
 }

@@ -99,6 +99,9 @@ struct DevicePairsResult {
   std::size_t count = 0;
   /// As QueryResult::complete: false when max_pairs pairs were found and more may exist.
   bool complete = true;
+  /// As QueryResult::kept: a self query answered from the result kept for the mesh's unchanged
+  /// geometry, whose pairs were copied into the buffer (no query ran on the device).
+  bool kept = false;
 };
 
 /// For GPU consumers (a simulation whose state lives on the device): intersectSelf on the CUDA
@@ -108,9 +111,10 @@ struct DevicePairsResult {
 /// place when the call returns (the library's stream has finished), so any stream may read them.
 /// No copy to the host is made, which saves the read-back of the pairs (H100: 0.07 ms of the
 /// UNC cloth ball's 0.80 ms frame, 61,530 pairs; benchmarks/RESULTS-gpu.md). A self query here
-/// always runs on the device: it neither returns nor keeps a result kept for unchanged geometry
-/// (QueryResult::kept), so for a rigid mesh whose self pairs are asked every frame the host
-/// query, answered from its kept result after the second call, costs less.
+/// follows QueryResult::kept's rule, sharing the mesh's kept result with intersectSelf: a rigid
+/// mesh's self query runs on the device until its result is kept (the query that keeps it reads
+/// the pairs back once), and from then on the kept pairs are copied into the buffer (a host to
+/// device copy of count pairs; nothing when a rigid mesh has no self pairs, its usual case).
 /// `device_pairs` may be null when `capacity` is 0 (the count alone). Throws InvalidInputError
 /// when options.backend is Backend::Cpu (Auto and Cuda both mean the GPU here), when
 /// device_pairs is null with a non-zero capacity or is not device memory, and
