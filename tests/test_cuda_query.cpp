@@ -321,13 +321,16 @@ TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {
     // the previous self query runs (reading its pairs back once) and keeps the result; the host
     // query is then answered from it, and so are later device queries, whose buffer gets the
     // kept pairs (a prefix when it is smaller; only the count with capacity 0).
+    // A fresh mesh: `sizes`' queries above (with keeping off) were already of its geometry, so
+    // its next query would keep.
     kdet_test::ScopedEnv kept_on("KDET_FCL_CUDA_SELF_CACHE", nullptr);
-    const std::vector<TrianglePair> first = intersectSelf(sizes, on(Backend::Cuda)).pairs;
+    const HashedMesh<S> rigid(makeRandomSoup<S>(3001, 1, S(1e-3), S(0.2), 9));
+    const std::vector<TrianglePair> first = intersectSelf(rigid, on(Backend::Cuda)).pairs;
     ASSERT_GT(first.size(), 10u);
     cuda::setProfiling(true);
     {
       DevicePairBuffer buf(first.size() + 1);
-      const DevicePairsResult d = intersectSelfOnDevice(sizes, buf.p, buf.n, on(Backend::Cuda));
+      const DevicePairsResult d = intersectSelfOnDevice(rigid, buf.p, buf.n, on(Backend::Cuda));
       EXPECT_FALSE(d.kept);
       EXPECT_FALSE(cuda::lastQueryProfile().self_cached);
       EXPECT_GT(cuda::lastQueryProfile().candidates, 0u);  // it ran
@@ -337,11 +340,11 @@ TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {
       got.pop_back();
       EXPECT_EQ(got, first);
     }
-    EXPECT_TRUE(intersectSelf(sizes, on(Backend::Cuda)).kept);  // kept by the device query
+    EXPECT_TRUE(intersectSelf(rigid, on(Backend::Cuda)).kept);  // kept by the device query
     for (std::size_t cap : {first.size() + 1, std::size_t(4), std::size_t(0)}) {
       DevicePairBuffer buf(cap == 0 ? 0 : cap + 1);
       const DevicePairsResult d =
-          intersectSelfOnDevice(sizes, cap == 0 ? nullptr : buf.p, cap, on(Backend::Cuda));
+          intersectSelfOnDevice(rigid, cap == 0 ? nullptr : buf.p, cap, on(Backend::Cuda));
       const std::string what = "kept, capacity " + std::to_string(cap);
       EXPECT_TRUE(d.kept) << what;
       EXPECT_TRUE(d.complete) << what;
@@ -357,7 +360,7 @@ TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {
       EXPECT_EQ(got, std::vector<TrianglePair>(first.begin(), first.begin() + wrote)) << what;
     }
     cuda::setProfiling(false);
-    EXPECT_TRUE(intersectSelf(sizes, on(Backend::Cuda)).kept);  // the kept result stays
+    EXPECT_TRUE(intersectSelf(rigid, on(Backend::Cuda)).kept);  // the kept result stays
   }
   {
     std::vector<TrianglePair> host(16);
