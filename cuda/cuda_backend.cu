@@ -85,8 +85,15 @@ enum PairCountWord : int {
   kMaxSurv = 9,      // the most survivors of one round
   kAllSurv = 10,     // survivors of all rounds
   kCellCands = 11,   // of all candidates, the cells' (addCountKernel)
-  kPairCountWords = 12
+  kBigSegment = 12,  // set when a segment of the pairs' counting order exceeds kSegmentMax
+  kPairCountWords = 13
 };
+// The pairs' counting order (runQuery): the pairs are counted per segment (their first index,
+// with a joint query's kind, shifted right to at most kSegmentBits bits) as the exact kernels
+// emit them; a scan, a scatter and a rank within each segment then order them as the radix sort
+// does, when no segment holds more than kSegmentMax pairs (else the radix sort runs).
+constexpr int kSegmentBits = 16;
+constexpr unsigned int kSegmentMax = 64;
 constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
 
 // ---------------------------------------------------------------------------------------------
@@ -652,6 +659,11 @@ struct PairSink {
   unsigned long long* count;
   unsigned long long capacity;
   int b_bits;
+  // The pairs' sink of a query whose pairs are ordered by counting (runQuery): the count of each
+  // segment (a >> seg_shift), and the word set when one exceeds kSegmentMax. Null otherwise.
+  unsigned int* seg = nullptr;
+  int seg_shift = 0;
+  unsigned long long* big = nullptr;
 };
 
 __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, std::uint32_t b) {
@@ -659,6 +671,8 @@ __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, s
   const unsigned long long idx = groupIncrement(out.count, cg::coalesced_threads());
   if (idx < out.capacity)
     out.pairs[idx] = (static_cast<unsigned long long>(a) << out.b_bits) | b;
+  if (out.seg != nullptr && atomicAdd(out.seg + (a >> out.seg_shift), 1u) == kSegmentMax)
+    *out.big = 1;  // the segment's pair kSegmentMax + 1: the radix sort orders this query
 }
 
 /// One round of a query pass: phase 1, filter and exact tests of one contiguous range of the
@@ -1189,28 +1203,71 @@ __global__ void shiftIndicesKernel(std::uint32_t n, std::uint32_t by, std::uint3
   if (k < n) t[k] += by;
 }
 
-/// Sorted keys -> TrianglePair layout {a, b} (two 32-bit words), the first `limit` of the m
-/// written to `out` (in place of the unsorted keys, or the caller's device buffer). With `kinds`
-/// (two meshes hashed as one: the pair's kind in the bits of a from a_bits up, selfExactKernel),
-/// also counts the pairs of kinds 1 and 2 among all m into kinds[0] and kinds[1] and clears the
-/// kind from a: the host knows where each kind's run starts from the counts.
-__global__ void unpackPairsKernel(std::uint32_t m, std::uint32_t limit,
-                                  const unsigned long long* __restrict__ keys, int b_bits,
-                                  uint2* __restrict__ out, int a_bits, unsigned long long* kinds) {
-  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-  if (k >= m) return;
-  const unsigned long long u = keys[k];
+/// Delivers the pair with key `u` at place k of the sorted order (k below the m delivered; all
+/// lanes of a warp that call it together): written to out[k] in TrianglePair layout {a, b} when
+/// k < limit (in place of the unsorted keys, or the caller's device buffer). With `kinds` (two
+/// meshes hashed as one: the pair's kind in the bits of a from a_bits up, selfExactKernel),
+/// also counts the pairs of kinds 1 and 2 into kinds[0] and kinds[1] and clears the kind from a:
+/// the host knows where each kind's run starts from the counts.
+__device__ __forceinline__ void deliverPair(std::uint32_t k, unsigned long long u,
+                                            std::uint32_t limit, int b_bits,
+                                            uint2* __restrict__ out, int a_bits,
+                                            unsigned long long* kinds) {
   const auto a = static_cast<unsigned int>(u >> b_bits);
   const unsigned int a_mask = kinds != nullptr ? (1u << a_bits) - 1 : ~0u;
   if (k < limit)
     out[k] = make_uint2(a & a_mask, static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
   if (kinds != nullptr) {
-    // The keys are sorted, so a warp's lanes mostly share one kind: one atomic per kind.
+    // The keys are in order (or in segments of one kind), so a warp's lanes mostly share one
+    // kind: one atomic per kind.
     const unsigned int kind = a >> a_bits;
     const unsigned int peers = __match_any_sync(__activemask(), kind);
     if (kind != 0 && (threadIdx.x & 31u) == static_cast<unsigned int>(__ffs(peers) - 1))
       atomicAdd(kinds + (kind - 1), static_cast<unsigned long long>(__popc(peers)));
   }
+}
+
+/// The radix-sorted keys delivered (deliverPair): the first m, of which the first `limit` are
+/// written.
+__global__ void unpackPairsKernel(std::uint32_t m, std::uint32_t limit,
+                                  const unsigned long long* __restrict__ keys, int b_bits,
+                                  uint2* __restrict__ out, int a_bits, unsigned long long* kinds) {
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k >= m) return;
+  deliverPair(k, keys[k], limit, b_bits, out, a_bits, kinds);
+}
+
+/// The counting order, step 2 (after the exclusive scan of the segments' counts, `seg`): each
+/// of the n keys goes to its segment's next free place in `grouped`; `seg[g]` ends as the end of
+/// segment g (the start of g + 1).
+__global__ void scatterPairsKernel(std::uint32_t n, const unsigned long long* __restrict__ keys,
+                                   int shift, unsigned int* __restrict__ seg,
+                                   unsigned long long* __restrict__ grouped) {
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k >= n) return;
+  const unsigned long long u = keys[k];
+  grouped[atomicAdd(seg + (u >> shift), 1u)] = u;
+}
+
+/// The counting order, step 3: each key's place is its segment's start plus the number of keys
+/// of the segment (at most kSegmentMax) below it (equal keys, which a query never emits, would
+/// be ranked by their place in `grouped`, so no place is taken twice); the first m places are
+/// delivered (deliverPair).
+__global__ void rankPairsKernel(std::uint32_t n, std::uint32_t m, std::uint32_t limit,
+                                const unsigned long long* __restrict__ grouped, int shift,
+                                const unsigned int* __restrict__ seg, int b_bits,
+                                uint2* __restrict__ out, int a_bits, unsigned long long* kinds) {
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k >= n) return;
+  const unsigned long long u = grouped[k];
+  const auto g = static_cast<std::uint32_t>(u >> shift);
+  const std::uint32_t first = g > 0 ? seg[g - 1] : 0, end = seg[g];
+  std::uint32_t place = first;
+  for (std::uint32_t j = first; j < end; ++j) {
+    const unsigned long long v = grouped[j];
+    place += (v < u || (v == u && j < k)) ? 1u : 0u;
+  }
+  if (place < m) deliverPair(place, u, limit, b_bits, out, a_bits, kinds);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1410,6 +1467,7 @@ struct Context {
   // candidate kernels (warpTasks()) and of the same-level pairs (cellTasks()), the pair counts of
   // two kinds of a joint query (kindCounts()), and the rounds' totals (roundEndKernel).
   DeviceBuffer<unsigned long long> cands, pairs, pairs_sorted, pair_count;
+  DeviceBuffer<unsigned int> segs;  // the pairs' counting order: the counts of the segments
   PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + 2 kind counts + the
                             // kPairCountWords counters of the last pass
   PinnedBuffer readback;    // sorted pairs on their way into the result
@@ -1456,6 +1514,7 @@ struct Context {
     cands.release();
     pairs.release();
     pairs_sorted.release();
+    segs.release();
     readback.release();
     red_ready = false;
   }
@@ -1463,7 +1522,7 @@ struct Context {
   std::size_t bytes() const {
     std::size_t b = cub_temp.bytes() + red.bytes() + mapped_f.bytes() +
                     mapped_d.bytes() + cands.bytes() + pairs.bytes() + pairs_sorted.bytes() +
-                    pair_count.bytes();
+                    pair_count.bytes() + segs.bytes();
     for (const auto& m : meshes_f) b += m.bytes();
     for (const auto& m : meshes_d) b += m.bytes();
     return b;
@@ -2152,6 +2211,10 @@ unsigned long long capacityKnob() {
 /// turns it off (default on; read at every query, so tests and benchmarks can compare both).
 bool planeFilterOn() { return detail::switchKnob("KDET_FCL_CUDA_PLANE_FILTER", true); }
 
+/// KDET_FCL_CUDA_COUNT_ORDER=0 orders every query's pairs by the radix sort, never by counting
+/// per segment (runQuery; read at every query).
+bool countOrderOn() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", true); }
+
 /// The candidates one round of a query may hold per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES
 /// = k from 0 to 2^20, read at every query; default 14; 0: no limit). A query whose phase 1
 /// gives more (two near-coincident cloth frames hashed as one give 21 per triangle) runs its
@@ -2257,16 +2320,29 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   int passes = 0;
   unsigned long long* const w = ctx.pair_count.data();
   const unsigned long long* const h = ctx.hostCount();
+  // The counting order's segments: a pair's first index (with a joint query's kind above it),
+  // shifted right to at most kSegmentBits bits.
+  const bool kinds = split > 0;
+  const int upper_bits = a_bits + (kinds ? 2 : 0);
+  const int seg_shift = std::max(0, upper_bits - kSegmentBits);
+  const std::size_t segments = std::size_t(1) << (upper_bits - seg_shift);
+  const bool counting = countOrderOn();
+  if (counting) ctx.segs.reserve(segments);
   while (true) {
     ++passes;
     CUDA_TRY(cudaMemsetAsync(w, 0, kPairCountWords * sizeof(unsigned long long), s));
+    if (counting)
+      CUDA_TRY(cudaMemsetAsync(ctx.segs.data(), 0, segments * sizeof(unsigned int), s));
     bool filtered = false;
     const std::uint32_t rounds = plan.total();
     for (std::uint32_t r = 0; r < rounds; ++r) {
       if (r > 0) ctx.markRound(r, 0);
       filtered = launch(PairSink{ctx.cands.data(), w + kCandCount, cand_cap, 32},
                         PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32},
-                        PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits}, plan.at(r));
+                        PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits,
+                                 counting ? ctx.segs.data() : nullptr, seg_shift,
+                                 w + kBigSegment},
+                        plan.at(r));
       checkLaunch();
       if (rounds > 1) {
         roundEndKernel<<<1, 1, 0, s>>>(w);
@@ -2328,27 +2404,50 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   if (options.max_pairs > 0 && m > options.max_pairs) m = options.max_pairs;
   // The pairs to deliver: all m to the host, or to the caller's device buffer as many as fit.
   // Two meshes hashed as one (split > 0) carry their kinds, which are counted over all m.
-  const bool kinds = split > 0;
   const std::size_t give = dev != nullptr ? std::min(m, dev->capacity) : m;
   if (dev != nullptr) dev->count = m;
+  // Ordered by counting when no segment holds more than kSegmentMax pairs, else sorted.
+  const bool counted = counting && h[kBigSegment] == 0;
+  unsigned long long* in = ctx.pairs.data();  // receives the pairs in TrianglePair layout
   if (give > 0 || (kinds && m > 0)) {
+    ctx.profile.pairs_counted = counted;
     ctx.pairs_sorted.reserve(n);
-    cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
-    const int bits = a_bits + b_bits + (kinds ? 2 : 0);
-    cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-      return cub::DeviceRadixSort::SortKeys(tmp, bytes, keys, static_cast<int>(n), 0, bits, s);
-    });
-    const unsigned long long* out = keys.Current();
-    unsigned long long* in = keys.Alternate();  // receives the unpacked pairs
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
     // Into the caller's device buffer, or in place of the unsorted keys; the kinds are counted
     // over all m, and their counts come back before the first chunk of a host result's pairs
     // (same stream), so that the three results are sized exactly, as a single query's is.
     const std::size_t unpack = kinds ? m : give;
-    unpackPairsKernel<<<blocksFor(unpack, 256), 256, 0, s>>>(
-        static_cast<std::uint32_t>(unpack), static_cast<std::uint32_t>(give), out, b_bits,
-        reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : in), a_bits,
-        kinds ? ctx.kindCounts() : nullptr);
+    auto to = [&] {
+      return reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : in);
+    };
+    unsigned long long* const kind_counts = kinds ? ctx.kindCounts() : nullptr;
+    if (counted) {
+      // The segments' starts (in place), each key into its segment, its rank there: the
+      // order of the sort, in three light kernels instead of the sort's passes.
+      unsigned int* const seg = ctx.segs.data();
+      cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
+        return cub::DeviceScan::ExclusiveSum(tmp, bytes, seg, seg, static_cast<int>(segments), s);
+      });
+      const int shift = b_bits + seg_shift;
+      scatterPairsKernel<<<blocksFor(n, 256), 256, 0, s>>>(static_cast<std::uint32_t>(n),
+                                                           ctx.pairs.data(), shift, seg,
+                                                           ctx.pairs_sorted.data());
+      checkLaunch();
+      rankPairsKernel<<<blocksFor(n, 256), 256, 0, s>>>(
+          static_cast<std::uint32_t>(n), static_cast<std::uint32_t>(unpack),
+          static_cast<std::uint32_t>(give), ctx.pairs_sorted.data(), shift, seg, b_bits, to(),
+          a_bits, kind_counts);
+    } else {
+      cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
+      const int bits = a_bits + b_bits + (kinds ? 2 : 0);
+      cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
+        return cub::DeviceRadixSort::SortKeys(tmp, bytes, keys, static_cast<int>(n), 0, bits, s);
+      });
+      in = keys.Alternate();  // the sorted keys are in Current()
+      unpackPairsKernel<<<blocksFor(unpack, 256), 256, 0, s>>>(
+          static_cast<std::uint32_t>(unpack), static_cast<std::uint32_t>(give), keys.Current(),
+          b_bits, to(), a_bits, kind_counts);
+    }
     checkLaunch();
     if (kinds)
       CUDA_TRY(cudaMemcpyAsync(ctx.hostKinds(), ctx.kindCounts(), 2 * sizeof(unsigned long long),
@@ -2938,6 +3037,7 @@ void readEveryKnob() {
   (void)upperLevelsFor(0);
   (void)capacityKnob();
   (void)planeFilterOn();
+  (void)countOrderOn();
   (void)roundCandidateLimit(1);
   (void)tileSize();
   (void)spansFor(0);
@@ -3161,6 +3261,7 @@ std::string deviceMemoryReport() {
   add("cands (+ build sort scratch)", ctx.cands.bytes());
   add("pairs (+ build counts)", ctx.pairs.bytes());
   add("pairs_sorted/survivors (+ build size sort)", ctx.pairs_sorted.bytes());
+  add("segs", ctx.segs.bytes());
   return r;
 }
 

@@ -398,6 +398,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_COUNT_BUILD_MAX", {"0", "150000", "4294967295"}, {"-1", "4294967296", "1e5"}},
       {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_COUNT_ORDER", on_off, not_on_off},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
@@ -1285,6 +1286,99 @@ TYPED_TEST(CudaQueryTyped, SelfQueriesScanOnlyTheLevelsAboveThatHoldACellOfTheir
           }
       }
     }
+  }
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
+  // The pairs are put in order by counting them per segment of first indices (a scan, a scatter,
+  // a rank within each segment) unless a segment holds more than 64 pairs; then, and with
+  // KDET_FCL_CUDA_COUNT_ORDER=0, the radix sort orders them. Both orders must be the same, on
+  // self, inter and joint queries, meshes whose segments span several first indices (more than
+  // 2^16 triangles), max_pairs, a buffer on the device smaller than the pairs, forced overflows,
+  // and a fan of 64 pairs in one segment (counted) or 65 (sorted).
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
+  cuda::setProfiling(true);
+  // `query()` under the default and under the radix sort: the same pairs; `counted`: whether
+  // the default counted.
+  auto both = [](const std::string& what, bool counted, auto&& query) {
+    const std::vector<TrianglePair> first = query();
+    EXPECT_EQ(cuda::lastQueryProfile().pairs_counted, counted) << what;
+    kdet_test::ScopedEnv radix("KDET_FCL_CUDA_COUNT_ORDER", "0");
+    const std::vector<TrianglePair> second = query();
+    EXPECT_FALSE(cuda::lastQueryProfile().pairs_counted) << what;
+    EXPECT_EQ(first, second) << what;
+    return first;
+  };
+  auto selfPairs = [](const HashedMesh<S>& m, std::size_t max_pairs = 0) {
+    return [&m, max_pairs] { return intersectSelf(m, on(Backend::Cuda, max_pairs)).pairs; };
+  };
+  HashedMesh<S> cloth(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.8)));
+  HashedMesh<S> cloth2(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.85)));
+  HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
+  HashedMesh<S> big(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(0.8)));
+  ASSERT_GT(big.numTriangles(), 65536u);  // 17 index bits: two first indices per segment
+  const std::vector<TrianglePair> cloth_self = both("cloth self", true, selfPairs(cloth));
+  EXPECT_EQ(cloth_self, sorted(intersectSelf(cloth, on(Backend::Cpu)).pairs));
+  EXPECT_GT(cloth_self.size(), 100u);
+  const std::vector<TrianglePair> big_self = both("big cloth self", true, selfPairs(big));
+  EXPECT_GT(big_self.size(), 100u);
+  EXPECT_TRUE(strictlySorted(big_self));
+  const std::vector<TrianglePair> inter = both(
+      "cloth/sphere", true, [&] { return intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs; });
+  EXPECT_GT(inter.size(), 10u);
+  EXPECT_TRUE(strictlySorted(inter));
+  // Joint: the three kinds, each a run in the order.
+  (void)both("two cloths, joint", true, [&] {
+    const AllPairsResult r = intersectAll(cloth, cloth2, on(Backend::Cuda));
+    EXPECT_TRUE(cuda::lastQueryProfile().joint);
+    EXPECT_EQ(r.self_a.pairs, cloth_self);
+    std::vector<TrianglePair> all = r.self_a.pairs;
+    all.insert(all.end(), r.self_b.pairs.begin(), r.self_b.pairs.end());
+    all.push_back({~0u, ~0u});  // the runs' ends, so that a pair in the wrong run shows
+    all.insert(all.end(), r.inter.pairs.begin(), r.inter.pairs.end());
+    return all;
+  });
+  EXPECT_EQ(both("cloth self, max_pairs 9", true, selfPairs(cloth, 9)),
+            std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + 9));
+  {
+    kdet_test::ScopedEnv small("KDET_FCL_CUDA_PAIR_CAPACITY", "7");  // overflow and rerun
+    EXPECT_EQ(both("cloth self, pair buffers of 7", true, selfPairs(cloth)), cloth_self);
+  }
+  {
+    const std::size_t third = cloth_self.size() / 3;
+    DevicePairBuffer buf(third + 1);
+    EXPECT_EQ(both("cloth self on the device, a third", true,
+                   [&] {
+                     const DevicePairsResult d =
+                         intersectSelfOnDevice(cloth, buf.p, third, on(Backend::Cuda));
+                     EXPECT_EQ(d.count, cloth_self.size());
+                     std::vector<TrianglePair> got = buf.read();
+                     EXPECT_EQ(got.back(), kUnwritten);
+                     got.pop_back();
+                     return got;
+                   }),
+              std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + third));
+  }
+  // A fan: one large triangle (index 0) crossed by k small ones that touch nothing else, so that
+  // the segment of first index 0 holds exactly k pairs.
+  for (std::size_t k : {std::size_t(64), std::size_t(65)}) {
+    TriangleMesh<S> fan;
+    fan.addTriangle({-10, -10, 0}, {10, -10, 0}, {0, 10, 0});
+    for (std::size_t i = 0; i < k; ++i) {
+      const S x = S(-0.45) + S(0.1) * S(i % 10), y = S(-0.45) + S(0.1) * S(i / 10);
+      fan.addTriangle({x, y, S(-0.01)}, {x + S(0.02), y, S(0.01)}, {x, y + S(0.02), S(0.01)});
+    }
+    const HashedMesh<S> m(fan);
+    const std::string what = "fan of " + std::to_string(k);
+    const std::vector<TrianglePair> pairs = both(what, k <= 64, selfPairs(m));
+    ASSERT_EQ(pairs.size(), k) << what;
+    for (std::size_t i = 0; i < k; ++i)
+      EXPECT_EQ(pairs[i], (TrianglePair{0, static_cast<std::uint32_t>(i + 1)})) << what;
   }
   cuda::setProfiling(false);
 #endif
