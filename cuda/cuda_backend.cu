@@ -91,9 +91,12 @@ enum PairCountWord : int {
 // The pairs' counting order (runQuery): the pairs are counted per segment (their first index,
 // with a joint query's kind, shifted right to at most kSegmentBits bits) as the exact kernels
 // emit them; a scan, a scatter and a rank within each segment then order them as the radix sort
-// does, when no segment holds more than kSegmentMax pairs (else the radix sort runs).
+// does, when there are at least kCountOrderMinPairs pairs and no segment holds more than
+// kSegmentMax (else the radix sort runs: a few thousand keys fit its single-tile sort, and a
+// segment's rank reads the whole segment).
 constexpr int kSegmentBits = 16;
-constexpr unsigned int kSegmentMax = 64;
+constexpr unsigned int kSegmentMax = 256;
+constexpr unsigned long long kCountOrderMinPairs = 4096;
 constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
 
 // ---------------------------------------------------------------------------------------------
@@ -2211,9 +2214,11 @@ unsigned long long capacityKnob() {
 /// turns it off (default on; read at every query, so tests and benchmarks can compare both).
 bool planeFilterOn() { return detail::switchKnob("KDET_FCL_CUDA_PLANE_FILTER", true); }
 
-/// KDET_FCL_CUDA_COUNT_ORDER=0 orders every query's pairs by the radix sort, never by counting
-/// per segment (runQuery; read at every query).
-bool countOrderOn() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", true); }
+/// The pairs' order by counting (runQuery): KDET_FCL_CUDA_COUNT_ORDER = 0 never (the radix sort
+/// always), 1 whenever no segment exceeds kSegmentMax pairs, unset: also only from
+/// kCountOrderMinPairs pairs. Read at every query.
+bool countOrderAllowed() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", true); }
+bool countOrderForced() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", false); }
 
 /// The candidates one round of a query may hold per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES
 /// = k from 0 to 2^20, read at every query; default 14; 0: no limit). A query whose phase 1
@@ -2326,7 +2331,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   const int upper_bits = a_bits + (kinds ? 2 : 0);
   const int seg_shift = std::max(0, upper_bits - kSegmentBits);
   const std::size_t segments = std::size_t(1) << (upper_bits - seg_shift);
-  const bool counting = countOrderOn();
+  const bool counting = countOrderAllowed();
   if (counting) ctx.segs.reserve(segments);
   while (true) {
     ++passes;
@@ -2406,8 +2411,10 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   // Two meshes hashed as one (split > 0) carry their kinds, which are counted over all m.
   const std::size_t give = dev != nullptr ? std::min(m, dev->capacity) : m;
   if (dev != nullptr) dev->count = m;
-  // Ordered by counting when no segment holds more than kSegmentMax pairs, else sorted.
-  const bool counted = counting && h[kBigSegment] == 0;
+  // Ordered by counting when no segment holds more than kSegmentMax pairs and there are enough
+  // pairs (or KDET_FCL_CUDA_COUNT_ORDER=1), else sorted.
+  const bool counted =
+      counting && h[kBigSegment] == 0 && (n >= kCountOrderMinPairs || countOrderForced());
   unsigned long long* in = ctx.pairs.data();  // receives the pairs in TrianglePair layout
   if (give > 0 || (kinds && m > 0)) {
     ctx.profile.pairs_counted = counted;
@@ -3037,7 +3044,7 @@ void readEveryKnob() {
   (void)upperLevelsFor(0);
   (void)capacityKnob();
   (void)planeFilterOn();
-  (void)countOrderOn();
+  (void)countOrderAllowed();
   (void)roundCandidateLimit(1);
   (void)tileSize();
   (void)spansFor(0);

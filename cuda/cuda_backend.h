@@ -52,8 +52,9 @@
 // its range, which self queries then skip without a lookup (upperLevels(); by default recorded
 // while the mesh's last self query found at most 4 candidates per triangle). The pairs are put
 // in (a, b) order by counting them per segment of first indices as the exact tests emit them (a
-// scan, a scatter, a rank within each segment) when no segment holds more than 64 pairs, else by
-// the radix sort; KDET_FCL_CUDA_COUNT_ORDER=0 always sorts (read at every query). Uploads of deformed
+// scan, a scatter, a rank within each segment) when there are at least 4096 and no segment holds
+// more than 256, else by the radix sort; KDET_FCL_CUDA_COUNT_ORDER=0 always sorts, =1 counts
+// whatever the number of pairs (read at every query). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
 // force the thread count and the chunk size (read at every upload). A vertex array of 1 MiB or
@@ -186,8 +187,9 @@ struct QueryProfile {
   bool joint = false;  ///< intersectAll hashed both meshes as one and ran one self query
                        ///< (KDET_FCL_CUDA_JOINT)
   bool pairs_counted = false;  ///< the pairs were put in order by counting them per segment of
-                               ///< first indices, not by the radix sort (a segment of more than
-                               ///< 64 pairs: the sort; KDET_FCL_CUDA_COUNT_ORDER=0: always it)
+                               ///< first indices, not by the radix sort (fewer than 4096 pairs or
+                               ///< a segment of more than 256: the sort; KDET_FCL_CUDA_COUNT_ORDER
+                               ///< =0: always the sort, =1: counted whatever the pair count)
 };
 void setProfiling(bool on);
 QueryProfile lastQueryProfile();

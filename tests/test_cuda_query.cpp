@@ -12,6 +12,7 @@
 #include <iostream>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <optional>
 #include <random>
 #include <string>
@@ -1291,94 +1292,158 @@ TYPED_TEST(CudaQueryTyped, SelfQueriesScanOnlyTheLevelsAboveThatHoldACellOfTheir
 #endif
 }
 
+#if KDET_FCL_TEST_HAVE_CUDA
+/// `fans` fans, each a large triangle crossed by `k` small ones that touch nothing else: a self
+/// query has k pairs (f, f + 1) .. (f, f + k) for each fan's large triangle f.
+template <class S>
+TriangleMesh<S> makeFans(std::size_t fans, std::size_t k) {
+  TriangleMesh<S> m;
+  std::size_t side = 1;
+  while (side * side < k) ++side;
+  const S step = S(0.04), w = S(4) * step * S(side);  // the large triangle's half-width
+  for (std::size_t f = 0; f < fans; ++f) {
+    const S cx = S(3) * w * S(f), cy = 0;
+    m.addTriangle({cx - w, cy - w, 0}, {cx + w, cy - w, 0}, {cx, cy + w, 0});
+    for (std::size_t i = 0; i < k; ++i) {
+      const S x = cx + step * (S(i % side) - S(side) / 2), y = cy + step * (S(i / side) - S(side) / 2);
+      m.addTriangle({x, y, S(-0.01)}, {x + S(0.02), y, S(0.01)}, {x, y + S(0.02), S(0.01)});
+    }
+  }
+  return m;
+}
+
+/// The most pairs of one segment of the counting order (cuda_backend.cu): first indices of a
+/// mesh of `triangles` shifted right to at most 16 bits.
+std::size_t largestSegment(const std::vector<TrianglePair>& pairs, std::size_t triangles) {
+  int bits = 1;
+  while ((std::size_t(1) << bits) < triangles) ++bits;
+  const int shift = bits > 16 ? bits - 16 : 0;
+  std::map<std::uint32_t, std::size_t> count;
+  std::size_t most = 0;
+  for (const TrianglePair& p : pairs) most = std::max(most, ++count[p.a >> shift]);
+  return most;
+}
+#endif
+
 TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // The pairs are put in order by counting them per segment of first indices (a scan, a scatter,
-  // a rank within each segment) unless a segment holds more than 64 pairs; then, and with
-  // KDET_FCL_CUDA_COUNT_ORDER=0, the radix sort orders them. Both orders must be the same, on
-  // self, inter and joint queries, meshes whose segments span several first indices (more than
-  // 2^16 triangles), max_pairs, a buffer on the device smaller than the pairs, forced overflows,
-  // and a fan of 64 pairs in one segment (counted) or 65 (sorted).
+  // a rank within each segment) when there are at least 4096 and no segment holds more than 256
+  // (KDET_FCL_CUDA_COUNT_ORDER=1: whatever the number of pairs); otherwise, and with
+  // KDET_FCL_CUDA_COUNT_ORDER=0, the radix sort orders them. The orders must be the same, on
+  // self, inter and joint queries, a mesh whose segments span two first indices (more than 2^16
+  // triangles), max_pairs, a buffer on the device smaller than the pairs, forced overflows, and
+  // fans: 256 pairs in one segment (counted when forced), 257 (sorted), 80 fans of 60 (4,800
+  // pairs: counted by default).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
   cuda::setProfiling(true);
-  // `query()` under the default and under the radix sort: the same pairs; `counted`: whether
-  // the default counted.
-  auto both = [](const std::string& what, bool counted, auto&& query) {
+  // `query()` by default, with counting forced and with the radix sort: the same pairs each
+  // time; `by_default` and `forced`: whether those two counted.
+  auto orders = [](const std::string& what, bool by_default, bool forced, auto&& query) {
     const std::vector<TrianglePair> first = query();
-    EXPECT_EQ(cuda::lastQueryProfile().pairs_counted, counted) << what;
-    kdet_test::ScopedEnv radix("KDET_FCL_CUDA_COUNT_ORDER", "0");
-    const std::vector<TrianglePair> second = query();
-    EXPECT_FALSE(cuda::lastQueryProfile().pairs_counted) << what;
-    EXPECT_EQ(first, second) << what;
+    EXPECT_EQ(cuda::lastQueryProfile().pairs_counted, by_default) << what << ", by default";
+    for (const char* knob : {"1", "0"}) {
+      kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
+      EXPECT_EQ(query(), first) << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob;
+      EXPECT_EQ(cuda::lastQueryProfile().pairs_counted, knob[0] == '1' && forced)
+          << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob;
+    }
     return first;
+  };
+  // The expected choices for a query of a mesh of `triangles` that finds `pairs`.
+  auto choices = [](const std::vector<TrianglePair>& pairs, std::size_t triangles) {
+    const bool fits = !pairs.empty() && largestSegment(pairs, triangles) <= 256;
+    return std::make_pair(fits && pairs.size() >= 4096, fits);
   };
   auto selfPairs = [](const HashedMesh<S>& m, std::size_t max_pairs = 0) {
     return [&m, max_pairs] { return intersectSelf(m, on(Backend::Cuda, max_pairs)).pairs; };
   };
-  HashedMesh<S> cloth(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.8)));
-  HashedMesh<S> cloth2(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.85)));
+  auto checkSelf = [&](const std::string& what, const HashedMesh<S>& m) {
+    const std::vector<TrianglePair> want = sorted(intersectSelf(m, on(Backend::Cpu)).pairs);
+    const auto c = choices(want, m.numTriangles());
+    EXPECT_EQ(orders(what, c.first, c.second, selfPairs(m)), want) << what;
+    return want;
+  };
+  HashedMesh<S> cloth(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(1.0)));  // on the sphere
+  HashedMesh<S> cloth2(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.95)));
   HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
-  HashedMesh<S> big(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(0.8)));
+  HashedMesh<S> big(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(1.0)));
   ASSERT_GT(big.numTriangles(), 65536u);  // 17 index bits: two first indices per segment
-  const std::vector<TrianglePair> cloth_self = both("cloth self", true, selfPairs(cloth));
-  EXPECT_EQ(cloth_self, sorted(intersectSelf(cloth, on(Backend::Cpu)).pairs));
-  EXPECT_GT(cloth_self.size(), 100u);
-  const std::vector<TrianglePair> big_self = both("big cloth self", true, selfPairs(big));
-  EXPECT_GT(big_self.size(), 100u);
-  EXPECT_TRUE(strictlySorted(big_self));
-  const std::vector<TrianglePair> inter = both(
-      "cloth/sphere", true, [&] { return intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs; });
-  EXPECT_GT(inter.size(), 10u);
-  EXPECT_TRUE(strictlySorted(inter));
-  // Joint: the three kinds, each a run in the order.
-  (void)both("two cloths, joint", true, [&] {
+  const std::vector<TrianglePair> cloth_self = checkSelf("cloth self", cloth);
+  ASSERT_GT(cloth_self.size(), 100u);
+  const auto cloth_choices = choices(cloth_self, cloth.numTriangles());
+  EXPECT_TRUE(cloth_choices.second);  // counted when forced
+  EXPECT_GT(checkSelf("big cloth self", big).size(), 100u);
+  {
+    const std::vector<TrianglePair> want =
+        sorted(intersectMeshes(cloth, sphere, on(Backend::Cpu)).pairs);
+    EXPECT_GT(want.size(), 10u);
+    const auto c = choices(want, cloth.numTriangles());
+    EXPECT_EQ(orders("cloth/sphere", c.first, c.second,
+                     [&] { return intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs; }),
+              want);
+  }
+  // Joint: the three kinds, each a run in the order (the first two meshes' selfs, a mark, the
+  // pairs across). Every choice is compared; which one runs is not asserted here.
+  auto joint = [&] {
     const AllPairsResult r = intersectAll(cloth, cloth2, on(Backend::Cuda));
     EXPECT_TRUE(cuda::lastQueryProfile().joint);
+    const bool counted = cuda::lastQueryProfile().pairs_counted;
     EXPECT_EQ(r.self_a.pairs, cloth_self);
     std::vector<TrianglePair> all = r.self_a.pairs;
     all.insert(all.end(), r.self_b.pairs.begin(), r.self_b.pairs.end());
-    all.push_back({~0u, ~0u});  // the runs' ends, so that a pair in the wrong run shows
+    all.push_back({~0u, ~0u});
     all.insert(all.end(), r.inter.pairs.begin(), r.inter.pairs.end());
-    return all;
-  });
-  EXPECT_EQ(both("cloth self, max_pairs 9", true, selfPairs(cloth, 9)),
+    return std::make_pair(all, counted);
+  };
+  const auto joint_default = joint();
+  for (const char* knob : {"1", "0"}) {
+    kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
+    const auto other = joint();
+    EXPECT_EQ(other.first, joint_default.first) << "joint, KDET_FCL_CUDA_COUNT_ORDER=" << knob;
+    if (knob[0] == '0') EXPECT_FALSE(other.second);
+  }
+  EXPECT_GT(joint_default.first.size(), cloth_self.size() + 100);
+  EXPECT_EQ(orders("cloth self, max_pairs 9", cloth_choices.first, true, selfPairs(cloth, 9)),
             std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + 9));
   {
     kdet_test::ScopedEnv small("KDET_FCL_CUDA_PAIR_CAPACITY", "7");  // overflow and rerun
-    EXPECT_EQ(both("cloth self, pair buffers of 7", true, selfPairs(cloth)), cloth_self);
+    EXPECT_EQ(selfPairs(cloth)(), cloth_self);
+    kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", "1");
+    EXPECT_EQ(selfPairs(cloth)(), cloth_self) << "pair buffers of 7, counted";
+    EXPECT_TRUE(cuda::lastQueryProfile().pairs_counted);
   }
   {
     const std::size_t third = cloth_self.size() / 3;
     DevicePairBuffer buf(third + 1);
-    EXPECT_EQ(both("cloth self on the device, a third", true,
-                   [&] {
-                     const DevicePairsResult d =
-                         intersectSelfOnDevice(cloth, buf.p, third, on(Backend::Cuda));
-                     EXPECT_EQ(d.count, cloth_self.size());
-                     std::vector<TrianglePair> got = buf.read();
-                     EXPECT_EQ(got.back(), kUnwritten);
-                     got.pop_back();
-                     return got;
-                   }),
+    EXPECT_EQ(orders("cloth self on the device, a third", cloth_choices.first, true,
+                     [&] {
+                       const DevicePairsResult d =
+                           intersectSelfOnDevice(cloth, buf.p, third, on(Backend::Cuda));
+                       EXPECT_EQ(d.count, cloth_self.size());
+                       std::vector<TrianglePair> got = buf.read();
+                       EXPECT_EQ(got.back(), kUnwritten);
+                       got.pop_back();
+                       return got;
+                     }),
               std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + third));
   }
-  // A fan: one large triangle (index 0) crossed by k small ones that touch nothing else, so that
-  // the segment of first index 0 holds exactly k pairs.
-  for (std::size_t k : {std::size_t(64), std::size_t(65)}) {
-    TriangleMesh<S> fan;
-    fan.addTriangle({-10, -10, 0}, {10, -10, 0}, {0, 10, 0});
-    for (std::size_t i = 0; i < k; ++i) {
-      const S x = S(-0.45) + S(0.1) * S(i % 10), y = S(-0.45) + S(0.1) * S(i / 10);
-      fan.addTriangle({x, y, S(-0.01)}, {x + S(0.02), y, S(0.01)}, {x, y + S(0.02), S(0.01)});
-    }
-    const HashedMesh<S> m(fan);
-    const std::string what = "fan of " + std::to_string(k);
-    const std::vector<TrianglePair> pairs = both(what, k <= 64, selfPairs(m));
-    ASSERT_EQ(pairs.size(), k) << what;
-    for (std::size_t i = 0; i < k; ++i)
-      EXPECT_EQ(pairs[i], (TrianglePair{0, static_cast<std::uint32_t>(i + 1)})) << what;
+  // Fans: the segment of each large triangle holds exactly k pairs.
+  for (const auto& fk : {std::make_pair(1, 256), std::make_pair(1, 257), std::make_pair(80, 60)}) {
+    const std::size_t fans = fk.first, k = fk.second;
+    const HashedMesh<S> m(makeFans<S>(fans, k));
+    const std::string what = std::to_string(fans) + " fans of " + std::to_string(k);
+    const std::vector<TrianglePair> pairs =
+        orders(what, fans * k >= 4096 && k <= 256, k <= 256, selfPairs(m));
+    ASSERT_EQ(pairs.size(), fans * k) << what;
+    for (std::size_t f = 0; f < fans; ++f)
+      for (std::size_t i = 0; i < k; ++i) {
+        const auto a = static_cast<std::uint32_t>(f * (k + 1));
+        EXPECT_EQ(pairs[f * k + i], (TrianglePair{a, a + static_cast<std::uint32_t>(i + 1)}))
+            << what;
+      }
   }
   cuda::setProfiling(false);
 #endif
