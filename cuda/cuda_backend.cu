@@ -79,7 +79,7 @@ enum PairCountWord : int {
   kSurvCount = 2,    // survivors of the plane filter, this round
   kWarpTasks = 3,    // task counter of the warp-wide candidate kernels, this round
   kCellTasks = 4,    // task counter of the same-level pairs, this round
-  kKindCounts = 5,   // two words: the pairs of kinds 1 and 2 of a joint query (unpackPairsKernel)
+  kKindCounts = 5,   // two words: the pairs of kinds 1 and 2 of a joint query (deliverPair)
   kMaxCands = 7,     // the most candidates of one round (roundEndKernel)
   kAllCands = 8,     // candidates of all rounds
   kMaxSurv = 9,      // the most survivors of one round
@@ -1206,12 +1206,12 @@ __global__ void shiftIndicesKernel(std::uint32_t n, std::uint32_t by, std::uint3
   if (k < n) t[k] += by;
 }
 
-/// Delivers the pair with key `u` at place k of the sorted order (k below the m delivered; all
-/// lanes of a warp that call it together): written to out[k] in TrianglePair layout {a, b} when
-/// k < limit (in place of the unsorted keys, or the caller's device buffer). With `kinds` (two
-/// meshes hashed as one: the pair's kind in the bits of a from a_bits up, selfExactKernel),
-/// also counts the pairs of kinds 1 and 2 into kinds[0] and kinds[1] and clears the kind from a:
-/// the host knows where each kind's run starts from the counts.
+/// Delivers the pair with key `u` at place k of the sorted order (k below the m delivered):
+/// written to out[k] in TrianglePair layout {a, b} when k < limit (out: the key buffer the order
+/// no longer needs, or the caller's device buffer). With `kinds` (two meshes hashed as one: the
+/// pair's kind in the bits of a from a_bits up, selfExactKernel), also counts the pairs of kinds
+/// 1 and 2 into kinds[0] and kinds[1] and clears the kind from a: the host knows where each
+/// kind's run starts from the counts.
 __device__ __forceinline__ void deliverPair(std::uint32_t k, unsigned long long u,
                                             std::uint32_t limit, int b_bits,
                                             uint2* __restrict__ out, int a_bits,
@@ -1222,7 +1222,8 @@ __device__ __forceinline__ void deliverPair(std::uint32_t k, unsigned long long 
     out[k] = make_uint2(a & a_mask, static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
   if (kinds != nullptr) {
     // The keys are in order (or in segments of one kind), so a warp's lanes mostly share one
-    // kind: one atomic per kind.
+    // kind: one atomic per kind among the lanes that arrive together (lanes that arrive apart,
+    // after the rank's loops of different lengths, are each counted once by their own group).
     const unsigned int kind = a >> a_bits;
     const unsigned int peers = __match_any_sync(__activemask(), kind);
     if (kind != 0 && (threadIdx.x & 31u) == static_cast<unsigned int>(__ffs(peers) - 1))
@@ -1500,7 +1501,7 @@ struct Context {
                                                  3 * sizeof(BuildInfo));
   }
   unsigned long long* hostCells() { return hostTotal() + 1; }
-  unsigned long long* hostKinds() { return hostTotal() + 2; }  // 2 words (unpackPairsKernel)
+  unsigned long long* hostKinds() { return hostTotal() + 2; }  // 2 words (deliverPair)
   unsigned long long* hostCount() { return hostTotal() + 4; }  // kPairCountWords words
   unsigned long long* warpTasks() { return pair_count.data() + kWarpTasks; }
   unsigned long long* cellTasks() { return pair_count.data() + kCellTasks; }
@@ -2283,22 +2284,23 @@ struct DeviceOut {
 };
 
 /// Runs `launch(cand, survivors, out, round)` (it returns whether the plane filter ran) for each
-/// round of a pass, until every pair fits (overflow: grow, or more rounds; rerun), then sorts the
-/// pairs on the device and copies the first max_pairs (or all) of the sorted order into the
-/// result. The rounds (roundsFor: from `density`, the candidates per unit of `work` of the last
-/// query of this kind on these meshes, and from the counts of a pass that overflowed) split the
-/// candidate search's tasks into contiguous ranges (Round); each round's candidates and survivors
-/// reuse their buffers, its pairs add to the others'. All rounds of a pass are queued at once:
-/// the host reads the counts back once per pass, as with one round. With
-/// `parts` (two meshes hashed as one, the first's triangles below `split`; max_pairs 0), the
-/// pairs carry their kind in the two bits above the first index's a_bits (selfExactKernel), the
-/// sort covers those bits too, so the three kinds come as three runs, whose lengths the unpack
-/// counts; the runs are dealt out as they arrive: parts[0] gets the first mesh's own pairs,
-/// parts[1] the second's and parts[2] those across, each in its own mesh's indices and in (a, b)
-/// order, as the three separate queries give them. With `dev` (instead of `parts`), the sorted
-/// pairs are unpacked straight into the caller's device buffer, as many as fit, dev->count gets
-/// how many there were (and dev->kinds, with split, the pairs of kinds 1 and 2), nothing else is
-/// read back, and the call returns once the stream is done.
+/// round of a pass, until every pair fits (overflow: grow, or more rounds; rerun), then puts the
+/// pairs in key order on the device (by counting them per segment, or by the radix sort: see
+/// kSegmentBits) and copies the first max_pairs (or all) of that order into the result. The
+/// rounds (roundsFor: from `density`, the candidates per unit of `work` of the last query of
+/// this kind on these meshes, and from the counts of a pass that overflowed) split the candidate
+/// search's tasks into contiguous ranges (Round); each round's candidates and survivors reuse
+/// their buffers, its pairs add to the others'. All rounds of a pass are queued at once: the host
+/// reads the counts back once per pass, as with one round. With `parts` (two meshes hashed as
+/// one, the first's triangles below `split`; max_pairs 0), the pairs carry their kind in the two
+/// bits above the first index's a_bits (selfExactKernel), the order covers those bits too, so the
+/// three kinds come as three runs, whose lengths the delivery (deliverPair) counts; the runs are
+/// dealt out as they arrive: parts[0] gets the first mesh's own pairs, parts[1] the second's and
+/// parts[2] those across, each in its own mesh's indices and in (a, b) order, as the three
+/// separate queries give them. With `dev` (instead of `parts`), the ordered pairs are delivered
+/// straight into the caller's device buffer, as many as fit, dev->count gets how many there were
+/// (and dev->kinds, with split, the pairs of kinds 1 and 2), nothing else is read back, and the
+/// call returns once the stream is done.
 template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
                      std::size_t work, double density, double first_share, bool stages,
@@ -2420,9 +2422,10 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     ctx.profile.pairs_counted = counted;
     ctx.pairs_sorted.reserve(n);
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
-    // Into the caller's device buffer, or in place of the unsorted keys; the kinds are counted
-    // over all m, and their counts come back before the first chunk of a host result's pairs
-    // (same stream), so that the three results are sized exactly, as a single query's is.
+    // Into the caller's device buffer, or the key buffer the order no longer needs (`in`); the
+    // kinds are counted over all m, and their counts come back before the first chunk of a host
+    // result's pairs (same stream), so that the three results are sized exactly, as a single
+    // query's is.
     const std::size_t unpack = kinds ? m : give;
     auto to = [&] {
       return reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : in);

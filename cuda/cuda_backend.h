@@ -183,13 +183,15 @@ struct QueryProfile {
   std::size_t cell_candidates = 0;  ///< of `candidates`, those the cells gave (self_cell_pairs)
   int cell_rows = 0;  ///< entries per warp task of the cells' pairs (KDET_FCL_CUDA_CELL_ROWS)
   bool self_cached = false;  ///< a self query answered from the kept result of an unchanged mesh
-                             ///< (no device work, all times 0; KDET_FCL_CUDA_SELF_CACHE=0: never)
+                             ///< (no query on the device, all times 0; the device form copies the
+                             ///< kept pairs into its buffer; KDET_FCL_CUDA_SELF_CACHE=0: never)
   bool joint = false;  ///< intersectAll hashed both meshes as one and ran one self query
                        ///< (KDET_FCL_CUDA_JOINT)
   bool pairs_counted = false;  ///< the pairs were put in order by counting them per segment of
                                ///< first indices, not by the radix sort (fewer than 4096 pairs or
                                ///< a segment of more than 256: the sort; KDET_FCL_CUDA_COUNT_ORDER
-                               ///< =0: always the sort, =1: counted whatever the pair count)
+                               ///< =0: always the sort, =1: counted whatever the pair count).
+                               ///< False when no pair was delivered (none found, or capacity 0)
 };
 void setProfiling(bool on);
 QueryProfile lastQueryProfile();

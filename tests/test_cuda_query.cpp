@@ -1305,22 +1305,27 @@ TriangleMesh<S> makeFans(std::size_t fans, std::size_t k) {
     const S cx = S(3) * w * S(f), cy = 0;
     m.addTriangle({cx - w, cy - w, 0}, {cx + w, cy - w, 0}, {cx, cy + w, 0});
     for (std::size_t i = 0; i < k; ++i) {
-      const S x = cx + step * (S(i % side) - S(side) / 2), y = cy + step * (S(i / side) - S(side) / 2);
+      const S x = cx + step * (S(i % side) - S(side) / 2);
+      const S y = cy + step * (S(i / side) - S(side) / 2);
       m.addTriangle({x, y, S(-0.01)}, {x + S(0.02), y, S(0.01)}, {x, y + S(0.02), S(0.01)});
     }
   }
   return m;
 }
 
-/// The most pairs of one segment of the counting order (cuda_backend.cu): first indices of a
-/// mesh of `triangles` shifted right to at most 16 bits.
-std::size_t largestSegment(const std::vector<TrianglePair>& pairs, std::size_t triangles) {
+/// The most pairs of one segment of the counting order (cuda_backend.cu): the first index of a
+/// pair of `runs[k]` (its kind k, above the bits of `triangles`' indices when there are several
+/// runs: a joint query's), shifted right to at most 16 bits.
+std::size_t largestSegment(const std::vector<std::vector<TrianglePair>>& runs,
+                           std::size_t triangles) {
   int bits = 1;
   while ((std::size_t(1) << bits) < triangles) ++bits;
-  const int shift = bits > 16 ? bits - 16 : 0;
-  std::map<std::uint32_t, std::size_t> count;
+  const int upper = bits + (runs.size() > 1 ? 2 : 0), shift = upper > 16 ? upper - 16 : 0;
+  std::map<std::uint64_t, std::size_t> count;
   std::size_t most = 0;
-  for (const TrianglePair& p : pairs) most = std::max(most, ++count[p.a >> shift]);
+  for (std::size_t k = 0; k < runs.size(); ++k)
+    for (const TrianglePair& p : runs[k])
+      most = std::max(most, ++count[((std::uint64_t(k) << bits) | p.a) >> shift]);
   return most;
 }
 #endif
@@ -1330,9 +1335,9 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // a rank within each segment) when there are at least 4096 and no segment holds more than 256
   // (KDET_FCL_CUDA_COUNT_ORDER=1: whatever the number of pairs); otherwise, and with
   // KDET_FCL_CUDA_COUNT_ORDER=0, the radix sort orders them. The orders must be the same, on
-  // self, inter and joint queries, a mesh whose segments span two first indices (more than 2^16
-  // triangles), max_pairs, a buffer on the device smaller than the pairs, forced overflows, and
-  // fans: 256 pairs in one segment (counted when forced), 257 (sorted), 80 fans of 60 (4,800
+  // self, inter and joint queries, meshes whose segments span several first indices (more than
+  // 2^16 triangles), max_pairs, a buffer on the device smaller than the pairs, forced overflows,
+  // and fans: 256 pairs in one segment (counted when forced), 257 (sorted), 80 fans of 60 (4,800
   // pairs: counted by default).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
@@ -1354,7 +1359,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   };
   // The expected choices for a query of a mesh of `triangles` that finds `pairs`.
   auto choices = [](const std::vector<TrianglePair>& pairs, std::size_t triangles) {
-    const bool fits = !pairs.empty() && largestSegment(pairs, triangles) <= 256;
+    const bool fits = !pairs.empty() && largestSegment({pairs}, triangles) <= 256;
     return std::make_pair(fits && pairs.size() >= 4096, fits);
   };
   auto selfPairs = [](const HashedMesh<S>& m, std::size_t max_pairs = 0) {
@@ -1385,27 +1390,53 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
                      [&] { return intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs; }),
               want);
   }
-  // Joint: the three kinds, each a run in the order (the first two meshes' selfs, a mark, the
-  // pairs across). Every choice is compared; which one runs is not asserted here.
-  auto joint = [&] {
-    const AllPairsResult r = intersectAll(cloth, cloth2, on(Backend::Cuda));
-    EXPECT_TRUE(cuda::lastQueryProfile().joint);
-    const bool counted = cuda::lastQueryProfile().pairs_counted;
-    EXPECT_EQ(r.self_a.pairs, cloth_self);
-    std::vector<TrianglePair> all = r.self_a.pairs;
-    all.insert(all.end(), r.self_b.pairs.begin(), r.self_b.pairs.end());
-    all.push_back({~0u, ~0u});
-    all.insert(all.end(), r.inter.pairs.begin(), r.inter.pairs.end());
-    return std::make_pair(all, counted);
-  };
-  const auto joint_default = joint();
-  for (const char* knob : {"1", "0"}) {
-    kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
-    const auto other = joint();
-    EXPECT_EQ(other.first, joint_default.first) << "joint, KDET_FCL_CUDA_COUNT_ORDER=" << knob;
-    if (knob[0] == '0') EXPECT_FALSE(other.second);
+  {
+    const std::vector<TrianglePair> want =
+        sorted(intersectMeshes(big, sphere, on(Backend::Cpu)).pairs);
+    EXPECT_GT(want.size(), 10u);
+    const auto c = choices(want, big.numTriangles());  // two first indices per segment
+    EXPECT_EQ(orders("big cloth/sphere", c.first, c.second,
+                     [&] { return intersectMeshes(big, sphere, on(Backend::Cuda)).pairs; }),
+              want);
   }
-  EXPECT_GT(joint_default.first.size(), cloth_self.size() + 100);
+  // Joint: the three kinds, each a run in the order (the first mesh's self pairs, the second's,
+  // a mark, the pairs across), by default, counted when forced, and sorted; their segments are
+  // (kind, first index) for the two small cloths, and 16 first indices of a kind for the two
+  // large ones (2 x 72k triangles).
+  auto joint = [&](const HashedMesh<S>& a, const HashedMesh<S>& b, const std::string& what) {
+    const QueryOptions cpu = on(Backend::Cpu);
+    const std::vector<std::vector<TrianglePair>> runs = {
+        sorted(intersectSelf(a, cpu).pairs), sorted(intersectSelf(b, cpu).pairs),
+        sorted(intersectMeshes(a, b, cpu).pairs)};
+    std::vector<TrianglePair> want = runs[0];
+    want.insert(want.end(), runs[1].begin(), runs[1].end());
+    want.push_back({~0u, ~0u});
+    want.insert(want.end(), runs[2].begin(), runs[2].end());
+    const bool fits = largestSegment(runs, a.numTriangles() + b.numTriangles()) <= 256;
+    auto run = [&] {
+      const AllPairsResult r = intersectAll(a, b, on(Backend::Cuda));
+      EXPECT_TRUE(cuda::lastQueryProfile().joint) << what;
+      std::vector<TrianglePair> all = r.self_a.pairs;
+      all.insert(all.end(), r.self_b.pairs.begin(), r.self_b.pairs.end());
+      all.push_back({~0u, ~0u});
+      all.insert(all.end(), r.inter.pairs.begin(), r.inter.pairs.end());
+      return std::make_pair(all, cuda::lastQueryProfile().pairs_counted);
+    };
+    const auto by_default = run();
+    EXPECT_EQ(by_default.first, want) << what;
+    EXPECT_EQ(by_default.second, fits && want.size() - 1 >= 4096) << what << ", by default";
+    for (const char* knob : {"1", "0"}) {
+      kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
+      const auto other = run();
+      EXPECT_EQ(other.first, want) << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob;
+      EXPECT_EQ(other.second, knob[0] == '1' && fits)
+          << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob;
+    }
+    return fits;
+  };
+  EXPECT_TRUE(joint(cloth, cloth2, "two cloths, joint"));  // counted when forced
+  HashedMesh<S> big2(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(0.95)));
+  (void)joint(big, big2, "two big cloths, joint");
   EXPECT_EQ(orders("cloth self, max_pairs 9", cloth_choices.first, true, selfPairs(cloth, 9)),
             std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + 9));
   {

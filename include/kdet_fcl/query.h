@@ -114,7 +114,7 @@ struct DevicePairsResult {
 /// follows QueryResult::kept's rule, sharing the mesh's kept result with intersectSelf: a rigid
 /// mesh's self query runs on the device until its result is kept (the query that keeps it reads
 /// the pairs back once), and from then on the kept pairs are copied into the buffer (a host to
-/// device copy of count pairs; nothing when a rigid mesh has no self pairs, its usual case).
+/// device copy of as many as fit; nothing when a rigid mesh has no self pairs, its usual case).
 /// `device_pairs` may be null when `capacity` is 0 (the count alone). Throws InvalidInputError
 /// when options.backend is Backend::Cpu (Auto and Cuda both mean the GPU here), when
 /// device_pairs is null with a non-zero capacity or is not device memory, and
