@@ -57,8 +57,8 @@
 // whatever the number of pairs (read at every query). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
-// force the thread count and the chunk size (read at every upload). A vertex array of 1 MiB or
-// more is instead registered as page-locked memory on its first upload (the registration kept
+// force the thread count and the chunk size (read at every upload). A vertex array of 256 KiB or
+// more is instead registered as page-locked memory on its second upload (the registration kept
 // with the HashedMesh, detail::HostPin, and dropped by it before that buffer can go;
 // updateVertices writes into the same buffer) and copied by one DMA from there, with no staging
 // copy (QueryProfile::pinned_uploads); KDET_FCL_CUDA_PIN_VERTICES=0 keeps the staged copy.
@@ -170,7 +170,7 @@ struct QueryProfile {
                                 ///< (meshes of up to KDET_FCL_CUDA_COUNT_BUILD_MAX triangles;
                                 ///< KDET_FCL_CUDA_COUNT_BUILD=0 never, 1 always)
   int pinned_uploads = 0;       ///< vertex uploads copied straight from the mesh's page-locked
-                                ///< buffer (KDET_FCL_CUDA_PIN_VERTICES; arrays of 1 MiB and up)
+                                ///< buffer (KDET_FCL_CUDA_PIN_VERTICES; arrays of 256 KiB and up)
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
   bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)

@@ -83,9 +83,10 @@ inline int uploadThreads(std::size_t chunks) {
 
 /// Vertex arrays from this size up may be uploaded straight from their own buffer, registered as
 /// page-locked memory once (pinHostMemory), instead of through a staging copy: on an H100 host
-/// 6.7 MB took 0.13 ms by DMA alone and 0.37-0.41 ms staged by 2-8 threads
-/// (benchmarks/RESULTS-gpu.md, "Vertex upload"). Below it the staged copy costs little.
-constexpr std::size_t kPinMinBytes = std::size_t(1) << 20;
+/// 6.7 MB took 0.13 ms by DMA alone and 0.37-0.41 ms staged by 2-8 threads, and the cloth ball's
+/// 0.55 MB 0.021 ms against 0.055 staged (benchmarks/RESULTS-gpu.md, "Vertex upload"). Below
+/// 64 pages the staged copy costs little, and a registration would cover few whole pages.
+constexpr std::size_t kPinMinBytes = std::size_t(256) << 10;
 
 /// KDET_FCL_CUDA_PIN_VERTICES=0 keeps every vertex upload on the staged path (for comparisons;
 /// read at every upload). Any value but 0 or 1 throws InvalidInputError.
