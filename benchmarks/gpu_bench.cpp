@@ -248,17 +248,23 @@ Row runScene(const BScene& sc, const Config& cfg) {
       n += q.pairs.size();
       if (sets) sets->push_back(std::move(q.pairs));
     };
-    if (on_dev != nullptr && joint) {
-      auto all = [&] {
-        return intersectAllOnDevice(H(0, f), H(1, f), on_dev->data(), on_dev->capacity(),
-                                    opts(Backend::Cuda));
-      };
-      AllDevicePairsResult d = all();
-      if (d.total() > on_dev->capacity()) {
-        on_dev->reserve(d.total());
-        d = all();
+    // query(buffer, capacity) into on_dev, grown and asked again when its `count(result)` pairs
+    // did not fit.
+    auto intoBuffer = [&](auto&& query, auto&& count) {
+      auto d = query(on_dev->data(), on_dev->capacity());
+      if (count(d) > on_dev->capacity()) {
+        on_dev->reserve(count(d));
+        d = query(on_dev->data(), on_dev->capacity());
       }
       profiled();
+      return d;
+    };
+    if (on_dev != nullptr && joint) {
+      const AllDevicePairsResult d = intoBuffer(
+          [&](TrianglePair* p, std::size_t c) {
+            return intersectAllOnDevice(H(0, f), H(1, f), p, c, opts(Backend::Cuda));
+          },
+          [](const AllDevicePairsResult& r) { return r.total(); });
       if (prof && !cuda::lastQueryProfile().joint) {
         static bool warned = false;
         if (!warned)
@@ -278,12 +284,8 @@ Row runScene(const BScene& sc, const Config& cfg) {
     }
     if (on_dev != nullptr) {
       auto onDevice = [&](auto&& query) {  // query(buffer, capacity) -> DevicePairsResult
-        DevicePairsResult d = query(on_dev->data(), on_dev->capacity());
-        if (d.count > on_dev->capacity()) {
-          on_dev->reserve(d.count);
-          d = query(on_dev->data(), on_dev->capacity());
-        }
-        profiled();
+        const DevicePairsResult d =
+            intoBuffer(query, [](const DevicePairsResult& r) { return r.count; });
         n += d.count;
         if (sets) sets->push_back(on_dev->read(d.count));
       };

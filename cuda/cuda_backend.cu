@@ -2988,19 +2988,27 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   return res;
 }
 
-/// intersectAll with both meshes hashed as one (see cuda::intersectJoint): one build, one self
-/// query whose pairs across the two meshes are the inter-object pairs.
+/// Both meshes hashed as one (their own cache entry): one build, one self query whose pairs
+/// across the two meshes are the inter-object pairs, dealt out to `parts` or left in `dev`
+/// (runQuery).
+template <class S>
+void jointQuery(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
+                const QueryOptions& options, QueryResult* parts, DeviceOut* dev) {
+  ctx.profile = QueryProfile{};
+  ctx.record(0);
+  CachedMesh<S>& M = acquire(ctx, a, &b);
+  selfQuery(ctx, M, sourceOf(&a, &b), static_cast<std::uint32_t>(a.numTriangles()), parts,
+            options, dev);
+  ctx.profile.joint = true;
+}
+
+/// intersectAll with both meshes hashed as one (see cuda::intersectJoint).
 template <class S>
 AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
                          const QueryOptions& options) {
-  ctx.profile = QueryProfile{};
-  AllPairsResult r;
-  ctx.record(0);
-  CachedMesh<S>& M = acquire(ctx, a, &b);
   QueryResult parts[3];
-  selfQuery(ctx, M, sourceOf(&a, &b), static_cast<std::uint32_t>(a.numTriangles()),
-            parts, options);
-  ctx.profile.joint = true;
+  jointQuery(ctx, a, b, options, parts, nullptr);
+  AllPairsResult r;
   r.self_a = std::move(parts[0]);
   r.self_b = std::move(parts[1]);
   r.inter = std::move(parts[2]);
@@ -3013,12 +3021,7 @@ template <class S>
 AllDevicePairsResult jointOnDeviceImpl(Context& ctx, const HashedMesh<S>& a,
                                        const HashedMesh<S>& b, const QueryOptions& options,
                                        DeviceOut* dev) {
-  ctx.profile = QueryProfile{};
-  ctx.record(0);
-  CachedMesh<S>& M = acquire(ctx, a, &b);
-  selfQuery(ctx, M, sourceOf(&a, &b), static_cast<std::uint32_t>(a.numTriangles()), nullptr,
-            options, dev);
-  ctx.profile.joint = true;
+  jointQuery(ctx, a, b, options, nullptr, dev);
   AllDevicePairsResult r;  // (every pair is asked for: each result is complete)
   r.self_b.count = dev->kinds[0];
   r.inter.count = dev->kinds[1];
@@ -3115,15 +3118,23 @@ void checkDevicePairs(const TrianglePair* out, std::size_t capacity) {
         "cudaMallocManaged; host memory takes intersectSelf/intersectMeshes)");
 }
 
-/// A *OnDevice query: the pair buffer checked, then `run(ctx, &dev)`.
+/// A query into the caller's device buffer: the buffer checked, then `run(ctx, &dev)`.
 template <class Run>
-DevicePairsResult onDevice(TrianglePair* out, std::size_t capacity, Run&& run) {
+auto intoDevice(TrianglePair* out, std::size_t capacity, Run&& run) {
   return guarded([&](Context& ctx) {
     checkDevicePairs(out, capacity);
     DeviceOut dev{out, capacity, 0, {0, 0}};
-    const QueryResult r = run(ctx, &dev);
+    return run(ctx, &dev);
+  });
+}
+
+/// A single *OnDevice query (intoDevice): its count, completeness and keeping.
+template <class Run>
+DevicePairsResult onDevice(TrianglePair* out, std::size_t capacity, Run&& run) {
+  return intoDevice(out, capacity, [&](Context& ctx, DeviceOut* dev) {
+    const QueryResult r = run(ctx, dev);
     DevicePairsResult res;
-    res.count = dev.count;
+    res.count = dev->count;
     res.complete = r.complete;
     res.kept = r.kept;
     return res;
@@ -3186,10 +3197,8 @@ bool intersectJointOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
                             const QueryOptions& options, TrianglePair* out, std::size_t capacity,
                             AllDevicePairsResult* result) {
   if (!jointApplies(a, b, options)) return false;
-  *result = guarded([&](Context& ctx) {
-    checkDevicePairs(out, capacity);
-    DeviceOut dev{out, capacity, 0, {0, 0}};
-    return jointOnDeviceImpl(ctx, a, b, options, &dev);
+  *result = intoDevice(out, capacity, [&](Context& ctx, DeviceOut* dev) {
+    return jointOnDeviceImpl(ctx, a, b, options, dev);
   });
   return true;
 }
