@@ -26,6 +26,9 @@
 // (the cloth over a static sphere too, whose kept self result it then gives up); `none` runs the
 // three queries everywhere, for both GPU methods (the runs before 2026-11-23). The CPU methods
 // and FCL are unchanged. The CSV's `form` column says which form a row ran.
+// The CSV's `kdet_counted_share` column: of kDet GPU's profiled queries of the scene (kept self
+// results left out), the share whose pairs were put in order by counting (1) rather than by the
+// radix sort (0): QueryProfile::pairs_counted, KDET_FCL_CUDA_COUNT_ORDER.
 // Device memory: cuda::deviceBytesInUse() after kDet GPU's first frame of a scene (one frame's
 // meshes resident, plus the backend's scratch), divided by the scene's triangles ("B/tri").
 // Per frame, each method does what a new frame costs it:
@@ -119,6 +122,9 @@ struct Row {
          kdet_out = 0, kdet_cands = 0;
   // kDet GPU per frame with the pairs left on the device (intersect*OnDevice)
   double kdet_device_ms = std::nan("");
+  // Share of kDet's profiled GPU queries whose pairs were put in order by counting, not by the
+  // radix sort (QueryProfile::pairs_counted; kept self results, which run no query, left out)
+  double kdet_counted = std::nan("");
   double bvh_ms = 0, bvh_wall = 0, bvh_rebuild_ms = 0, bvh_upload = 0, bvh_refit = 0,
          bvh_traverse = 0, bvh_exact = 0, bvh_out = 0, bvh_cands = 0;
   double cpu2_ms = std::nan(""), cpu16_ms = std::nan("");
@@ -226,6 +232,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
   auto H = [&](int o, int f) -> HashedMesh<float>& {
     return *hm[o][std::min<std::size_t>(f, hm[o].size() - 1)];
   };
+  std::size_t queries_profiled = 0, queries_counted = 0;  // (Row::kdet_counted)
   // on_dev: the queries leave their pairs in that device buffer (intersect*OnDevice; grown and
   // asked again when they do not fit); sets then gets them read back.
   auto kdetGpuFrame = [&](int f, std::vector<Pairs>* sets, cuda::QueryProfile* prof,
@@ -236,6 +243,10 @@ Row runScene(const BScene& sc, const Config& cfg) {
     auto profiled = [&] {  // after each GPU call
       if (!prof) return;
       const cuda::QueryProfile p = cuda::lastQueryProfile();
+      if (!p.self_cached) {
+        ++queries_profiled;
+        if (p.pairs_counted) ++queries_counted;
+      }
       prof->build_ms += p.build_ms;
       prof->query_ms += p.query_ms;
       prof->candidates_ms += p.candidates_ms;
@@ -483,6 +494,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
   r.kdet_cand_ms = median(c1);
   r.kdet_out = median(o1);
   r.kdet_cands = median(nc);
+  if (queries_profiled > 0) r.kdet_counted = double(queries_counted) / double(queries_profiled);
   hm.clear();
   cuda::releaseDeviceMemory();
 
@@ -827,7 +839,8 @@ int main(int argc, char** argv) {
            "kdet_query_ms,kdet_candidates_ms,kdet_output_ms,kdet_candidates,lbvh_ms,lbvh_wall_ms,"
            "lbvh_rebuild_ms,lbvh_upload_ms,lbvh_refit_ms,lbvh_traverse_ms,lbvh_exact_ms,"
            "lbvh_output_ms,lbvh_candidates,cpu2_ms,cpu16_ms,fcl_kind,fcl_ms,fcl_refit_ms,"
-           "fcl_pairs,fcl_diff,agree,kdet_bytes_per_triangle,form,kdet_device_ms\n";
+           "fcl_pairs,fcl_diff,agree,kdet_bytes_per_triangle,form,kdet_device_ms,"
+           "kdet_counted_share\n";
     for (const Row& r : rows)
       out << r.id << ",\"" << r.label << "\"," << r.triangles << ',' << r.frames << ',' << r.pairs
           << ',' << r.kdet_ms << ',' << r.kdet_wall << ',' << r.kdet_build << ',' << r.kdet_query
@@ -837,7 +850,7 @@ int main(int argc, char** argv) {
           << r.bvh_out << ',' << r.bvh_cands << ',' << r.cpu2_ms << ',' << r.cpu16_ms << ','
           << r.fcl_kind << ',' << r.fcl_ms << ',' << r.fcl_refit << ',' << r.fcl_pairs << ','
           << r.fcl_diff << ',' << r.agree << ',' << r.bytes_per_tri << ',' << r.form << ','
-          << r.kdet_device_ms << '\n';
+          << r.kdet_device_ms << ',' << r.kdet_counted << '\n';
   }
   if (!json.empty()) {
     std::ofstream out(json);
@@ -852,7 +865,8 @@ int main(int argc, char** argv) {
           << ", \"kdet_build_ms\": " << num(r.kdet_build)
           << ", \"kdet_query_ms\": " << num(r.kdet_query)
           << ", \"kdet_output_ms\": " << num(r.kdet_out)
-          << ", \"kdet_device_ms\": " << num(r.kdet_device_ms) << ", \"lbvh_ms\": " << num(r.bvh_ms)
+          << ", \"kdet_device_ms\": " << num(r.kdet_device_ms)
+          << ", \"kdet_counted_share\": " << num(r.kdet_counted) << ", \"lbvh_ms\": " << num(r.bvh_ms)
           << ", \"lbvh_wall_ms\": " << num(r.bvh_wall)
           << ", \"lbvh_rebuild_ms\": " << num(r.bvh_rebuild_ms)
           << ", \"lbvh_refit_ms\": " << num(r.bvh_refit)

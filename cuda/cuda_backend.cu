@@ -758,11 +758,23 @@ __device__ __forceinline__ bool sameMesh(std::uint32_t split, std::uint32_t i, s
 }
 
 /// The self query's emit rule: a pair of one mesh that shares a vertex is adjacent, not a
-/// candidate.
+/// candidate. by_index (indexAdjacency()): phase 1 drops only the pairs that share a vertex
+/// index, and the pairs that share a vertex by its coordinates alone are dropped after it (by
+/// the plane filter, coordsAdjacent, or the self exact kernel, which tests both), so phase 1
+/// never waits for the vertices; else phase 1 drops both kinds.
 template <class S>
 __device__ __forceinline__ bool selfCandidate(const HashView<S>& M, std::uint32_t split,
-                                              std::uint32_t i, std::uint32_t j) {
-  return !sameMesh(split, i, j) || !adjacentTriangles(M, i, j);
+                                              std::uint32_t i, std::uint32_t j, bool by_index) {
+  if (!sameMesh(split, i, j)) return true;
+  if (by_index) return !shareIndex(loadTri(M.t, i), loadTri(M.t, j));
+  return !adjacentTriangles(M, i, j);
+}
+
+/// selfCandidate by index, with both triangles' indices at hand.
+__device__ __forceinline__ bool selfCandidateByIndex(std::uint32_t split, std::uint32_t i,
+                                                     std::uint32_t j, const TriIndices& ti,
+                                                     const TriIndices& tj) {
+  return !sameMesh(split, i, j) || !shareIndex(ti, tj);
 }
 
 /// The query box of B's triangle j in A's frame: its own box when the frames coincide, else the
@@ -834,7 +846,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
 template <class S, int G, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesKernel(HashView<S> M, std::uint32_t n, bool ordered, int level_skip,
-                         std::uint32_t split, Round round, PairSink cand) {
+                         bool by_index, std::uint32_t split, Round round, PairSink cand) {
   const auto tile = cg::tiled_partition<G>(cg::this_thread_block());
   const unsigned long long k =
       (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) / G;
@@ -846,7 +858,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       selfQueryLevels(M, cInfo(0), i, detail::levelFor(di, cInfo(0).grid), level_skip), tile,
       [&](std::uint32_t j, double dj) { return dj > di || (dj == di && j > i); },
       [&](std::uint32_t j) {
-        if (selfCandidate(M, split, i, j)) emitPair(cand, i, j);
+        if (selfCandidate(M, split, i, j, by_index)) emitPair(cand, i, j);
       });
 }
 
@@ -891,8 +903,9 @@ __device__ __forceinline__ void forEachWarpTask(unsigned long long* tasks,
 template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
-                             std::uint32_t max_visit, int level_skip, std::uint32_t split,
-                             Round round, PairSink cand, unsigned long long* tasks) {
+                             std::uint32_t max_visit, int level_skip, bool size_by_level,
+                             bool by_index, std::uint32_t split, Round round, PairSink cand,
+                             unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -905,20 +918,25 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     mine.d = 0;
     mine.levels = 0;
     mine.live = 0;
+    mine.size_level = detail::kMaxLevels;
     if (i < n) {
       mine.d = M.diam[i];
       mine.box = detail::intersectBoxes(boxOf(M, i), cInfo(0).bounds);
-      mine.levels = selfQueryLevels(M, cInfo(0), i, detail::levelFor(mine.d, cInfo(0).grid),
-                                    level_skip);
+      const int own = detail::levelFor(mine.d, cInfo(0).grid);
+      mine.levels = selfQueryLevels(M, cInfo(0), i, own, level_skip);
+      if (size_by_level) mine.size_level = static_cast<std::int16_t>(own);
+      if (by_index) mine.tri = loadTri(M.t, i);
       mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
     }
     scanCandidatesWarp<kSpans>(
-        M, cInfo(0), q, mine, log_p, max_visit,
+        M, cInfo(0), q, mine, log_p, max_visit, by_index,
         [&](const WarpQuery& o, std::uint32_t j, double dj) {
           return dj > o.d || (dj == o.d && j > o.id);
         },
-        [&](const WarpQuery& o, std::uint32_t j) {
-          if (selfCandidate(M, split, o.id, j)) emitPair(cand, o.id, j);
+        [&](const WarpQuery& o, std::uint32_t j, const TriIndices& tj) {
+          if (by_index ? selfCandidateByIndex(split, o.id, j, o.tri, tj)
+                       : selfCandidate(M, split, o.id, j, false))
+            emitPair(cand, o.id, j);
         });
   });
 }
@@ -959,11 +977,13 @@ template <class S, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, 8)
     selfCellPairsKernel(HashView<S> M, const std::uint32_t* __restrict__ block_cell,
                         std::uint32_t cell_cap, std::uint32_t rows, std::uint32_t max_visit,
-                        std::uint32_t split, Round round, PairSink cand,
+                        bool by_index, std::uint32_t split, Round round, PairSink cand,
                         unsigned long long* tasks) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
+  __shared__ TriIndices row_tris[kQueryBlock / 32][32];  // (by_index)
   Aabb<S>* const row_box = row_boxes[threadIdx.x >> 5];
+  TriIndices* const row_tri = row_tris[threadIdx.x >> 5];
   const unsigned int lane = threadIdx.x & 31u;
   const BuildInfo& info = cInfo(0);
   const std::uint32_t cells = info.need_sync ? 0u : (info.cells < cell_cap ? info.cells : cell_cap);
@@ -994,6 +1014,7 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
       v = __ldg(M.entry_tri + k);
       if (kSpans) span = __ldg(M.entry_span + k);
       row_box[lane] = loadBoxOf(M.box + (v & kEntryTriMask));
+      if (by_index) row_tri[lane] = loadTri(M.t, v & kEntryTriMask);
     }
     __syncwarp();
     while (true) {
@@ -1024,10 +1045,14 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
         if (kSpans && !detail::subcellSpansOverlap(o_span, __ldg(M.entry_span + b))) continue;
         const std::uint32_t i = o_v & kEntryTriMask, j = w & kEntryTriMask;
         const Aabb<S> e = loadBoxOf(M.box + j);
+        // (by_index: the partner's vertex indices come in the same round trip as its box.)
+        const TriIndices tj = by_index ? loadTri(M.t, j) : TriIndices{0, 0, 0};
         bool overlap;
         if constexpr (std::is_same<S, float>::value) overlap = boxesInFloat(row_box[owner], e);
         else overlap = detail::boxesOverlap(row_box[owner], e);
-        if (overlap && selfCandidate(M, split, i, j)) emitPair(cand, i < j ? i : j, i < j ? j : i);
+        if (overlap && (by_index ? selfCandidateByIndex(split, i, j, row_tri[owner], tj)
+                                 : selfCandidate(M, split, i, j, false)))
+          emitPair(cand, i < j ? i : j, i < j ? j : i);
       }
       next += cnt;
     }
@@ -1043,8 +1068,8 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     interCandidatesWarpKernel(HashView<S> A, HashView<S> B, const Vec3<S>* __restrict__ va,
                               std::uint32_t na, std::uint32_t nb, bool identity,
                               Transform<double> b_to_a, double eps_coef, double eps_tmag,
-                              unsigned int log_p, std::uint32_t max_visit, Round round,
-                              PairSink cand, unsigned long long* tasks) {
+                              unsigned int log_p, std::uint32_t max_visit, bool size_by_level,
+                              Round round, PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -1061,6 +1086,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     mine.d = 0;
     mine.levels = 0;
     mine.live = 0;
+    mine.size_level = detail::kMaxLevels;
     const BuildInfo& target = cInfo(a_side ? 1 : 0);
     if (idx < nq) {
       Aabb<double> box;
@@ -1075,19 +1101,21 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       // Nothing in the other mesh is large enough (A: d_j >= d_i; B: d_i > d_j).
       const bool none = a_side ? mine.d > cInfo(1).d_max : mine.d >= cInfo(0).d_max;
       mine.box = detail::intersectBoxes(box, target.bounds);
-      mine.levels = levelsFrom(target.level_mask, detail::levelFor(mine.d, target.grid));
+      const int own = detail::levelFor(mine.d, target.grid);
+      mine.levels = levelsFrom(target.level_mask, own);
+      if (size_by_level) mine.size_level = static_cast<std::int16_t>(own);
       mine.live = (none || detail::isEmpty(mine.box)) ? 0u : 1u;
     }
     if (a_side)
       scanCandidatesWarp<kSpans>(
-          B, target, q, mine, log_p, max_visit,
+          B, target, q, mine, log_p, max_visit, false,
           [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
-          [&](const WarpQuery& o, std::uint32_t j) { emitPair(cand, o.id, j); });
+          [&](const WarpQuery& o, std::uint32_t j, const TriIndices&) { emitPair(cand, o.id, j); });
     else
       scanCandidatesWarp<kSpans>(
-          A, target, q, mine, log_p, max_visit,
+          A, target, q, mine, log_p, max_visit, false,
           [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
-          [&](const WarpQuery& o, std::uint32_t i) { emitPair(cand, i, o.id); });
+          [&](const WarpQuery& o, std::uint32_t i, const TriIndices&) { emitPair(cand, i, o.id); });
   });
 }
 
@@ -1175,8 +1203,25 @@ __device__ __forceinline__ bool strictlyOneSide(const Vec3<S>* __restrict__ qv,
   return detail::orient3dFilterSign(plane, detail::toDouble(pv[pt[2]])) == s;
 }
 
+/// Whether two triangles of one mesh (vertices v, indices at ti and tj) share a vertex by its
+/// coordinates: the adjacency rule's second half (adjacentTriangles), for the pairs that phase 1
+/// passed by index alone (selfCandidate's by_index).
+template <class S>
+__device__ __forceinline__ bool coordsAdjacent(const Vec3<S>* __restrict__ v,
+                                               const std::uint32_t* __restrict__ ti,
+                                               const std::uint32_t* __restrict__ tj) {
+  const Vec3<S> a[3] = {v[ti[0]], v[ti[1]], v[ti[2]]};
+  const Vec3<S> b[3] = {v[tj[0]], v[tj[1]], v[tj[2]]};
+  bool adjacent = false;
+  for (int x = 0; x < 3; ++x)
+    for (int y = 0; y < 3; ++y) adjacent = adjacent || a[x] == b[y];
+  return adjacent;
+}
+
 /// Between phases 1 and 2 (Predicate::Exact only): one thread per candidate drops the pair when
-/// either triangle lies, provably, strictly on one side of the other's plane; the survivors are
+/// either triangle lies, provably, strictly on one side of the other's plane, or (coords: a self
+/// query whose phase 1 applied the adjacency rule by index only) when the two triangles belong
+/// to one mesh (split as in sameMesh) and share a vertex by coordinates; the survivors are
 /// appended to `out` (the same (i << 32) | j keys) for the exact kernel. Every dropped pair is one
 /// the exact test rejects, so the result set cannot change; the exact kernel (128 registers, low
 /// occupancy) then runs on several times fewer pairs. Inter queries pass A's mapped vertices as
@@ -1188,12 +1233,15 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
                       const unsigned long long* count, unsigned long long capacity,
                       const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
                       const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
-                      PairSink out) {
+                      bool coords, std::uint32_t split, PairSink out) {
   const unsigned long long m = *count < capacity ? *count : capacity;
   for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
        k += gridDim.x * blockDim.x) {
     const unsigned long long c = cand[k];
     const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+    if (coords && sameMesh(split, i, j) &&
+        coordsAdjacent(va, ta + 3 * std::size_t(i), ta + 3 * std::size_t(j)))
+      continue;
     const bool drop = strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
                       strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j));
     if (!drop) emitPair(out, i, j);
@@ -2599,6 +2647,24 @@ std::uint32_t warpVisit() {
 /// Both give the same candidates; benchmarks/RESULTS-gpu.md has the A/B.
 bool dynamicWarpTasks() { return detail::switchKnob("KDET_FCL_CUDA_WARP_TASKS", true); }
 
+/// Whether the warp-wide scan passes the entries of the levels above a query's own by the size
+/// rule without loading their diameters (WarpQuery::size_level): KDET_FCL_CUDA_SIZE_BY_LEVEL
+/// unset or 1; 0 loads and tests every entry's diameter. Read at every query, so tests and
+/// benchmarks can compare the two; both give the same candidates.
+bool sizeByLevel() { return detail::switchKnob("KDET_FCL_CUDA_SIZE_BY_LEVEL", true); }
+
+/// Whether a self query's phase 1 applies the adjacency rule by vertex index only
+/// (selfCandidate's by_index: the entry's indices come with its box, and the pairs that share a
+/// vertex by coordinates alone are dropped by the plane filter or the exact kernel), for a mesh
+/// (or two hashed as one) of nv vertices and nt triangles: KDET_FCL_CUDA_INDEX_ADJACENCY = 0
+/// (never), 1 (always), unset (when nv <= 1.5 nt: a mesh whose triangles share their vertices,
+/// about nt / 2 of them, where few pairs share a vertex by coordinates alone; a soup of
+/// unshared vertices, 3 nt of them, would pass every neighbour pair to the filter). Read at every
+/// query; the pairs are the same either way.
+bool indexAdjacency(std::size_t nv, std::size_t nt) {
+  return detail::switchKnob("KDET_FCL_CUDA_INDEX_ADJACENCY", 2 * nv <= 3 * nt);
+}
+
 /// The grid and task counter of a warp-wide candidate kernel with `tasks` warp tasks. With the
 /// counter (kWarpTaskLoop<S> and dynamicWarpTasks()): no more blocks of kQueryBlock threads than
 /// the device holds at once, as the occupancy calculator gives for that kernel (cached per
@@ -2732,14 +2798,14 @@ int filterMinBlocks() {
 template <class S>
 void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
                        const std::uint32_t* ta, const Vec3<S>* vb, const std::uint32_t* tb,
-                       const PairSink& surv) {
+                       bool coords, std::uint32_t split, const PairSink& surv) {
   const auto blocks = static_cast<unsigned int>(8 * g_num_sms);
   if (filterMinBlocks() == 1)
-    planeFilterKernel<S, 1><<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity,
-                                                            va, ta, vb, tb, surv);
+    planeFilterKernel<S, 1><<<blocks, kFilterBlock, 0, s>>>(
+        cand.pairs, cand.count, cand.capacity, va, ta, vb, tb, coords, split, surv);
   else
-    planeFilterKernel<S, 6><<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity,
-                                                            va, ta, vb, tb, surv);
+    planeFilterKernel<S, 6><<<blocks, kFilterBlock, 0, s>>>(
+        cand.pairs, cand.count, cand.capacity, va, ta, vb, tb, coords, split, surv);
   checkLaunch();
 }
 
@@ -2809,8 +2875,10 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const bool filter = usePlaneFilter(options);
   const bool spans = spansFor(std::max(A.inter_density, B.inter_density));
   const bool warp = warpScan();
+  const bool size_by_level = warp && sizeByLevel();
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
+  ctx.profile.size_by_level = size_by_level;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
@@ -2827,8 +2895,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
                                 : interCandidatesWarpKernel<S, 8, false>;
       const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
       kernel<<<wl.blocks, kQueryBlock, 0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a,
-                                               eps_coef, eps_tmag, log_p, warpVisit(), round,
-                                               cand, wl.tasks);
+                                               eps_coef, eps_tmag, log_p, warpVisit(),
+                                               size_by_level, round, cand, wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -2845,7 +2913,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
-      launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, surv);
+      launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, false, 0, surv);
       in = surv;
     }
     ctx.markRound(round.serial, 2);
@@ -2882,8 +2950,12 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   // (The entry count of the last build that read it back: an estimate after a re-hash.)
   const bool cell_pairs = selfCellPairs(M.info.entries);
   const int level_skip = cell_pairs ? 1 : 0;
+  const bool size_by_level = warp && sizeByLevel();
+  const bool by_index = indexAdjacency(M.nv, n);
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
+  ctx.profile.size_by_level = size_by_level;
+  ctx.profile.index_adjacency = by_index;
   ctx.profile.self_cell_pairs = cell_pairs;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     const HashView<S> mv = M.view();
@@ -2897,7 +2969,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
           kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
       kernel<<<blocks, kQueryBlock, 0, s>>>(mv, M.block_cell.data(),
                                             M.pending ? M.pending_cell_cap : M.cell_cap, rows,
-                                            warpVisit(), split, round, cand, ctx.cellTasks());
+                                            warpVisit(), by_index, split, round, cand,
+                                            ctx.cellTasks());
       checkLaunch();
       // The round's candidates so far are the cells' (cell_candidates; the stages' rounds).
       addCountKernel<<<1, 1, 0, s>>>(cand.count, ctx.pair_count.data() + kCellCands);
@@ -2911,8 +2984,9 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
         ctx.profile.warp_lanes = 1 << log_p;
         const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
         const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
-        kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip, split,
-                                                 round, cand, wl.tasks);
+        kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip,
+                                                 size_by_level, by_index, split, round, cand,
+                                                 wl.tasks);
       } else {
         withTile([&](auto g, auto mb) {
           constexpr int G = decltype(g)::value;
@@ -2920,7 +2994,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
           const auto kernel =
               spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
           kernel<<<std::max(1u, blocksFor(G * roundTasks(n, round), kQueryBlock)), kQueryBlock,
-                   0, s>>>(mv, un, M.size_ordered, level_skip, split, round, cand);
+                   0, s>>>(mv, un, M.size_ordered, level_skip, by_index, split, round, cand);
         });
       }
     }
@@ -2928,7 +3002,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
-      launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, surv);
+      launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, by_index, split, surv);
       in = surv;
     }
     ctx.markRound(round.serial, 2);
@@ -3058,6 +3132,8 @@ void readEveryKnob() {
   (void)warpLanesLog2(1, 0);
   (void)warpVisit();
   (void)dynamicWarpTasks();
+  (void)sizeByLevel();
+  (void)indexAdjacency(0, 0);
   (void)selfCellPairs(0);
   (void)cellRows(0, 0);
   (void)minBlocksKnob();

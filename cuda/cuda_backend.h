@@ -174,6 +174,11 @@ struct QueryProfile {
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
   bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)
+  bool size_by_level = false;  ///< the warp-wide scan passed the entries above each query's own
+                              ///< level by the size rule unloaded (KDET_FCL_CUDA_SIZE_BY_LEVEL)
+  bool index_adjacency = false;  ///< a self query's phase 1 dropped the pairs sharing a vertex by
+                                 ///< index only; those sharing one by coordinates alone were
+                                 ///< candidates, dropped later (KDET_FCL_CUDA_INDEX_ADJACENCY)
   bool warp_tasks = false;  ///< its warps took their queries from a counter (a grid of the
                             ///< resident warps; KDET_FCL_CUDA_WARP_TASKS=0: one warp per task)
   bool cells_by_size = false;  ///< the queried meshes' cells list their triangles by decreasing

@@ -264,7 +264,7 @@ __device__ __forceinline__ unsigned int cellEnds(int dx, int dy, int dz, int n0,
 template <bool kSpans>
 __device__ __forceinline__ bool entrySeenHere(std::uint32_t v, unsigned int ends,
                                               std::uint32_t espan, std::uint32_t qspan) {
-  return ((v >> 29) | ends | 0x38u) == 0x3Fu &&
+  return (((v >> 29) | ends | 0x38u) & 0x3Fu) == 0x3Fu &&
          (!kSpans || detail::subcellSpansOverlap(espan, qspan));
 }
 
@@ -344,6 +344,21 @@ __device__ __forceinline__ void scanCandidatesGroup(const HashView<S>& h, const 
   }
 }
 
+/// A triangle's three vertex indices.
+struct TriIndices {
+  std::uint32_t a, b, c;
+};
+
+__device__ __forceinline__ TriIndices loadTri(const std::uint32_t* __restrict__ t, std::uint32_t j) {
+  return {__ldg(t + 3 * j), __ldg(t + 3 * j + 1), __ldg(t + 3 * j + 2)};
+}
+
+/// Whether two triangles share a vertex index (every comparison made, no short circuit).
+__device__ __forceinline__ bool shareIndex(const TriIndices& x, const TriIndices& y) {
+  return (x.a == y.a) | (x.a == y.b) | (x.a == y.c) | (x.b == y.a) | (x.b == y.b) |
+         (x.b == y.c) | (x.c == y.a) | (x.c == y.b) | (x.c == y.c);
+}
+
 /// One lane's query in the warp-wide scan (scanCandidatesWarp), in shared memory so that every
 /// lane can test entries of every other lane's query.
 struct WarpQuery {
@@ -355,8 +370,20 @@ struct WarpQuery {
   /// The levels to scan (as scanCandidatesGroup's `levels`).
   unsigned long long levels;
   std::uint32_t id;          ///< the caller's index of the query triangle
-  std::uint32_t live;        ///< 1: the lane has a query (0: idle lane, or an empty clipped box)
+  /// Self queries whose scan loads each entry's vertex indices (scanCandidatesWarp's load_tri):
+  /// the query triangle's own, for the adjacency rule by index.
+  TriIndices tri;
+  std::uint16_t live;        ///< 1: the lane has a query (0: idle lane, or an empty clipped box)
+  /// The query's own level in the hash (levelFor of d in its grid): the entries of the levels
+  /// above it pass the size rule with no load of their diameter (a triangle stored above it is
+  /// strictly larger than the query, levelFor being monotone). kMaxLevels: every entry's
+  /// diameter is loaded and tested (KDET_FCL_CUDA_SIZE_BY_LEVEL=0).
+  std::int16_t size_level;
 };
+
+/// Bit of a visit's `ends` (cellEnds' six bits below it) in the warp-wide scan: the visited cell
+/// lies on a level above the query's size_level, so its entries pass the size rule unloaded.
+constexpr unsigned int kAboveQueryLevel = 1u << 6;
 
 /// The query box b as a float box for the test against entry boxes of float coordinates: lo
 /// rounded up and hi rounded down to float. For any float e and any double x, x <= e iff
@@ -448,6 +475,7 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
         if (cell >= 0) {
           ends = cellEnds(c.dx, c.dy, c.dz, c.n[0], c.n[1], c.n[2]);
           if (kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
+          if (c.L > mine.size_level) ends |= kAboveQueryLevel;
         }
       }
       if (++c.dz > c.n[2]) {
@@ -499,7 +527,8 @@ __device__ __forceinline__ int warpOwnerOf(std::uint32_t incl, std::uint32_t t) 
 /// round, whatever cell and query each belongs to. So no lane idles at the end of a cell, at the
 /// price of the size rule's early exit: an entry smaller than its query is rejected by accept()
 /// after its diameter is loaded instead of ending the cell. A larger P gives a small query set more
-/// warps.
+/// warps. emit(query, j, tj) gets entry j's vertex indices tj when `load_tri` (loaded beside its
+/// box, for a self query's adjacency rule), else zeros.
 /// accept(q_owner, j, d_j) and emit(q_owner, j) get the slot of the query that the entry is tested
 /// against. max_visit: 1..kMaxWarpVisit. The query's levels (query.levels) as scanCandidatesGroup's.
 /// Every lane of the warp must call, with warp-uniform arguments except `query`.
@@ -507,7 +536,7 @@ template <bool kSpans, class S, class Accept, class Emit>
 __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
                                                    WarpQuery* q,
                                                    const WarpQuery& query, unsigned int log_p,
-                                                   std::uint32_t max_visit,
+                                                   std::uint32_t max_visit, bool load_tri,
                                                    Accept&& accept, Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
@@ -549,16 +578,21 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
         const std::uint32_t espan = kSpans ? __ldg(h.entry_span + k) : 0u;
         if (entrySeenHere<kSpans>(v, o_ends, espan, o_qspan)) {
           const std::uint32_t j = v & kEntryTriMask;
-          const double dj = __ldg(h.diam + j);
+          // Above the query's own level the size rule holds (WarpQuery::size_level): no load.
+          const bool above = (o_ends & kAboveQueryLevel) != 0;
+          const double dj = above ? 0.0 : __ldg(h.diam + j);
+          // (load_tri: the entry's vertex indices come in the same round trip as its box.)
+          const TriIndices tj = load_tri ? loadTri(h.t, j) : TriIndices{0, 0, 0};
           const WarpQuery& oq = q[owner >> log_p];
           if constexpr (std::is_same<S, float>::value) {
             // The diameter and the box are loaded together and tested without a short circuit:
             // one round trip per entry (with the short circuit, each coordinate's load waited
             // for the previous comparison: H100, benchmarks/RESULTS-gpu.md).
             const detail::Aabb<float> e = loadBox(h.box + j);
-            if (accept(oq, j, dj) & boxesInFloat(oq.test, e)) emit(oq, j);
+            if ((above || accept(oq, j, dj)) & boxesInFloat(oq.test, e)) emit(oq, j, tj);
           } else {
-            if (accept(oq, j, dj) && detail::boxesOverlap(oq.box, boxOf(h, j))) emit(oq, j);
+            if ((above || accept(oq, j, dj)) && detail::boxesOverlap(oq.box, boxOf(h, j)))
+              emit(oq, j, tj);
           }
         }
       }

@@ -403,6 +403,8 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_SIZE_BY_LEVEL", on_off, not_on_off},
+      {"KDET_FCL_CUDA_INDEX_ADJACENCY", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_CELLS", on_off, not_on_off},
       {"KDET_FCL_CUDA_JOINT", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_CACHE", on_off, not_on_off},
@@ -969,7 +971,9 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   // its warps' tasks from a counter or one per warp (KDET_FCL_CUDA_WARP_TASKS), on cells built
   // for either scan (in size order or not), and with self queries taking their same-level pairs
   // from the cells or scanning every level from the query's own (KDET_FCL_CUDA_SELF_CELLS=1 or 0;
-  // unset, these meshes are far below the size from which the cells are used by default).
+  // unset, these meshes are far below the size from which the cells are used by default), and
+  // with the warp scan passing the entries above each query's own level by the size rule without
+  // their diameters or loading and testing every one (KDET_FCL_CUDA_SIZE_BY_LEVEL=1 or 0).
   // Scenes: a stack of 60 crossing sheets (cells of hundreds of entries, more than one warp round
   // per cell), a random soup of many sizes (many levels), a mesh of fewer than 32 triangles (one
   // partial warp), a triangle count that is no multiple of 32, and inter queries under a pose
@@ -1036,6 +1040,7 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
     const char* tasks;  // KDET_FCL_CUDA_WARP_TASKS
     bool rebuild;       // re-hash every mesh under this mode first (cuda::markDeformed)
     const char* cells = nullptr;  // KDET_FCL_CUDA_SELF_CELLS
+    const char* by_level = nullptr;  // KDET_FCL_CUDA_SIZE_BY_LEVEL
   };
   // The cells list their triangles by size only when a mesh was last built under the tile scan
   // (whose early exit needs that order); the tile scan must also be right on cells built for the
@@ -1045,17 +1050,20 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   for (const Mode m :
        {Mode{"tile", "0", nullptr, nullptr, nullptr, true, "0"},
         Mode{"warp", "0", "1", nullptr, nullptr, false, "1"},
-        Mode{"warp", "1", "2", nullptr, "0", true, "0"},
+        Mode{"warp", "1", "2", nullptr, "0", true, "0", "0"},
         Mode{"tile", "1", nullptr, nullptr, nullptr, false, "1"},
-        Mode{"warp", "0", "4", "3", nullptr, false, "1"},
-        Mode{"warp", "1", "8", "1", "0", false, "1"}, Mode{"warp", "0", "32", "3", "1", false, "0"},
+        Mode{"warp", "0", "4", "3", nullptr, false, "1", "0"},
+        Mode{"warp", "1", "8", "1", "0", false, "1", "1"},
+        Mode{"warp", "0", "32", "3", "1", false, "0", "0"},
         Mode{"warp", "1", "1", "1", nullptr, true, "1"},
         Mode{"tile", "0", nullptr, nullptr, nullptr, true},
         Mode{nullptr, "0", nullptr, nullptr, "0", false}}) {
     kdet_test::ScopedEnv scan("KDET_FCL_CUDA_SCAN", m.scan), spans("KDET_FCL_CUDA_SPANS", m.spans),
         lanes("KDET_FCL_CUDA_WARP_LANES", m.lanes), visit("KDET_FCL_CUDA_WARP_VISIT", m.visit),
-        tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks), cells("KDET_FCL_CUDA_SELF_CELLS", m.cells);
+        tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks), cells("KDET_FCL_CUDA_SELF_CELLS", m.cells),
+        by_level("KDET_FCL_CUDA_SIZE_BY_LEVEL", m.by_level);
     const bool cell_pairs = m.cells != nullptr && *m.cells == '1';
+    const bool size_by_level = m.by_level == nullptr || *m.by_level == '1';
     const bool warp = m.scan == nullptr || std::string(m.scan) == "warp";
     const bool dynamic = m.tasks == nullptr || *m.tasks != '0';
     if (m.rebuild) {
@@ -1065,7 +1073,8 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
     const std::string mode = std::string(m.scan ? m.scan : "default") + ", spans " + m.spans +
                              ", lanes " + (m.lanes ? m.lanes : "-") + ", visit " +
                              (m.visit ? m.visit : "-") + ", tasks " + (m.tasks ? m.tasks : "-") +
-                             ", self cells " + (m.cells ? m.cells : "-") +
+                             ", self cells " + (m.cells ? m.cells : "-") + ", size by level " +
+                             (m.by_level ? m.by_level : "-") +
                              (m.rebuild ? ", rebuilt" : "");
     for (auto& q : queries) {
       const QueryResult gpu = q.run(on(Backend::Cuda));
@@ -1073,6 +1082,7 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
       EXPECT_EQ(gpu.pairs, q.cpu) << q.what << " (" << mode << ")";
       EXPECT_EQ(p.warp_scan, warp) << mode;
       EXPECT_EQ(p.warp_tasks, warp && dynamic) << mode;
+      EXPECT_EQ(p.size_by_level, warp && size_by_level) << mode;
       EXPECT_EQ(p.cells_by_size, built_for_tile) << q.what << " (" << mode << ")";
       if (!warp) EXPECT_EQ(p.warp_lanes, 0) << mode;
       if (warp && m.lanes) EXPECT_EQ(p.warp_lanes, std::atoi(m.lanes)) << mode;
@@ -1329,6 +1339,98 @@ std::size_t largestSegment(const std::vector<std::vector<TrianglePair>>& runs,
   return most;
 }
 #endif
+
+TYPED_TEST(CudaQueryTyped, AdjacencyByIndexInPhaseOneDropsTheCoordinateNeighboursLater) {
+  // A self query drops the pairs of triangles that share a vertex (by index or by coordinates).
+  // With KDET_FCL_CUDA_INDEX_ADJACENCY=1 its phase 1 drops only those that share an index, and
+  // the plane filter (or, without it, the exact kernel) drops those that share coordinates alone;
+  // 0: phase 1 drops both; unset: by index when the mesh has at most 1.5 vertices per triangle.
+  // Scenes: a stack of crossing sheets built three ways: welded (every sheet's grid shares its
+  // vertices: no pair shares coordinates alone), a soup (every triangle its own three vertices:
+  // every neighbour pair does), and welded with a seam (one column of vertices duplicated, so the
+  // triangles on either side of it share coordinates only). Every way, with the cells' pairs on
+  // and off and with the filter on and off: the CPU's pairs; the candidates equal on the welded
+  // sheets and more by index on the others; with the filter, the same pairs reach the exact test.
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
+  static constexpr int kSheets = 8, kGrid = 24, kSeam = kGrid / 2;
+  auto sheets = [&](bool soup, bool seam) {
+    TriangleMesh<S> m;
+    auto at = [](int l, int i, int j) {
+      const S x = S(i) / kGrid, y = S(j) / kGrid;
+      return Vec3<S>{x, y, (y - S(0.53)) * S(0.05) * S(l - 3.5)};
+    };
+    for (int l = 0; l < kSheets; ++l) {
+      // Vertex (i, j) of sheet l; with the seam, column kSeam once more for the cells right of it.
+      const auto base = static_cast<std::uint32_t>(m.vertices.size());
+      for (int i = 0; i <= kGrid; ++i)
+        for (int j = 0; j <= kGrid; ++j) m.vertices.push_back(at(l, i, j));
+      const auto extra = static_cast<std::uint32_t>(m.vertices.size());
+      if (seam)
+        for (int j = 0; j <= kGrid; ++j) m.vertices.push_back(at(l, kSeam, j));
+      auto id = [&](int i, int j, int cell_i) {
+        if (seam && i == kSeam && cell_i == kSeam) return extra + std::uint32_t(j);
+        return base + std::uint32_t(i * (kGrid + 1) + j);
+      };
+      for (int i = 0; i < kGrid; ++i)
+        for (int j = 0; j < kGrid; ++j) {
+          if (soup) {
+            m.addTriangle(at(l, i, j), at(l, i + 1, j), at(l, i, j + 1));
+            m.addTriangle(at(l, i + 1, j), at(l, i + 1, j + 1), at(l, i, j + 1));
+          } else {
+            m.triangles.push_back({id(i, j, i), id(i + 1, j, i), id(i, j + 1, i)});
+            m.triangles.push_back({id(i + 1, j, i), id(i + 1, j + 1, i), id(i, j + 1, i)});
+          }
+        }
+    }
+    return m;
+  };
+  struct Scene {
+    std::string what;
+    HashedMesh<S> mesh;
+    bool by_index_default, more_candidates;
+  };
+  Scene scenes[] = {{"welded sheets", HashedMesh<S>(sheets(false, false)), true, false},
+                    {"soup sheets", HashedMesh<S>(sheets(true, false)), false, true},
+                    {"sheets with a seam", HashedMesh<S>(sheets(false, true)), true, true}};
+  // One geometry, its triangles in one order: the CPU gives the same pairs for all three.
+  const std::vector<TrianglePair> want =
+      sorted(intersectSelf(scenes[0].mesh, on(Backend::Cpu)).pairs);
+  EXPECT_GT(want.size(), 1000u);  // the sheets cross one another
+  cuda::setProfiling(true);
+  for (Scene& sc : scenes) {
+    EXPECT_EQ(sorted(intersectSelf(sc.mesh, on(Backend::Cpu)).pairs), want) << sc.what;
+    for (const char* cells : {"0", "1"})
+      for (const char* filter : {"1", "0"}) {
+        kdet_test::ScopedEnv c("KDET_FCL_CUDA_SELF_CELLS", cells),
+            f("KDET_FCL_CUDA_PLANE_FILTER", filter);
+        std::size_t candidates[2] = {0, 0}, exact[2] = {0, 0};  // [by index]
+        for (const char* knob : {static_cast<const char*>(nullptr), "0", "1"}) {
+          kdet_test::ScopedEnv adjacency("KDET_FCL_CUDA_INDEX_ADJACENCY", knob);
+          const std::string what = sc.what + ", self cells " + cells + ", filter " + filter +
+                                   ", index adjacency " + (knob ? knob : "unset");
+          EXPECT_EQ(intersectSelf(sc.mesh, on(Backend::Cuda)).pairs, want) << what;
+          const cuda::QueryProfile p = cuda::lastQueryProfile();
+          const bool by_index = knob ? *knob == '1' : sc.by_index_default;
+          EXPECT_EQ(p.index_adjacency, by_index) << what;
+          EXPECT_EQ(p.self_cell_pairs, *cells == '1') << what;
+          if (knob) {
+            candidates[by_index] = p.candidates;
+            exact[by_index] = p.exact_tests;
+          }
+        }
+        const std::string what = sc.what + ", self cells " + cells + ", filter " + filter;
+        if (sc.more_candidates) EXPECT_GT(candidates[1], candidates[0]) << what;
+        else EXPECT_EQ(candidates[1], candidates[0]) << what;
+        if (*filter == '1') EXPECT_EQ(exact[1], exact[0]) << what;
+        else EXPECT_EQ(exact[1], candidates[1]) << what;
+      }
+  }
+  cuda::setProfiling(false);
+#endif
+}
 
 TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // The pairs are put in order by counting them per segment of first indices (a scan, a scatter,
