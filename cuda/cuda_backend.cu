@@ -85,17 +85,18 @@ enum PairCountWord : int {
   kMaxSurv = 9,      // the most survivors of one round
   kAllSurv = 10,     // survivors of all rounds
   kCellCands = 11,   // of all candidates, the cells' (addCountKernel)
-  kBigSegment = 12,  // set when a segment of the pairs' counting order exceeds kSegmentMax
+  kBigSegment = 12,  // set when a segment of the pairs' counting order exceeds its limit
   kPairCountWords = 13
 };
 // The pairs' counting order (runQuery): the pairs are counted per segment (their first index,
 // with a joint query's kind, shifted right to at most kSegmentBits bits) as the exact kernels
 // emit them; a scan, a scatter and a rank within each segment then order them as the radix sort
 // does, when there are at least kCountOrderMinPairs pairs and no segment holds more than
-// kSegmentMax (else the radix sort runs: a few thousand keys fit its single-tile sort, and a
-// segment's rank reads the whole segment).
+// kSegmentMax (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT: segmentMax()) (else the radix sort runs: a few
+// thousand keys fit its single-tile sort, and a segment's rank reads the whole segment).
 constexpr int kSegmentBits = 16;
 constexpr unsigned int kSegmentMax = 256;
+constexpr unsigned int kSegmentMaxLimit = 65536;  // the knob's largest value
 constexpr unsigned long long kCountOrderMinPairs = 4096;
 constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
 
@@ -663,10 +664,11 @@ struct PairSink {
   unsigned long long capacity;
   int b_bits;
   // The pairs' sink of a query whose pairs are ordered by counting (runQuery): the count of each
-  // segment (a >> seg_shift), and the word set when one exceeds kSegmentMax. Null otherwise.
+  // segment (a >> seg_shift), and the word set when one exceeds seg_max. Null otherwise.
   unsigned int* seg = nullptr;
   int seg_shift = 0;
   unsigned long long* big = nullptr;
+  unsigned int seg_max = kSegmentMax;
 };
 
 __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, std::uint32_t b) {
@@ -674,8 +676,8 @@ __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, s
   const unsigned long long idx = groupIncrement(out.count, cg::coalesced_threads());
   if (idx < out.capacity)
     out.pairs[idx] = (static_cast<unsigned long long>(a) << out.b_bits) | b;
-  if (out.seg != nullptr && atomicAdd(out.seg + (a >> out.seg_shift), 1u) == kSegmentMax)
-    *out.big = 1;  // the segment's pair kSegmentMax + 1: the radix sort orders this query
+  if (out.seg != nullptr && atomicAdd(out.seg + (a >> out.seg_shift), 1u) == out.seg_max)
+    *out.big = 1;  // the segment's pair seg_max + 1: the radix sort orders this query
 }
 
 /// One round of a query pass: phase 1, filter and exact tests of one contiguous range of the
@@ -1302,7 +1304,7 @@ __global__ void scatterPairsKernel(std::uint32_t n, const unsigned long long* __
 }
 
 /// The counting order, step 3: each key's place is its segment's start plus the number of keys
-/// of the segment (at most kSegmentMax) below it (equal keys, which a query never emits, would
+/// of the segment (at most segmentMax()) below it (equal keys, which a query never emits, would
 /// be ranked by their place in `grouped`, so no place is taken twice); the first m places are
 /// delivered (deliverPair).
 __global__ void rankPairsKernel(std::uint32_t n, std::uint32_t m, std::uint32_t limit,
@@ -2264,10 +2266,18 @@ unsigned long long capacityKnob() {
 bool planeFilterOn() { return detail::switchKnob("KDET_FCL_CUDA_PLANE_FILTER", true); }
 
 /// The pairs' order by counting (runQuery): KDET_FCL_CUDA_COUNT_ORDER = 0 never (the radix sort
-/// always), 1 whenever no segment exceeds kSegmentMax pairs, unset: also only from
+/// always), 1 whenever no segment exceeds segmentMax() pairs, unset: also only from
 /// kCountOrderMinPairs pairs. Read at every query.
 bool countOrderAllowed() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", true); }
 bool countOrderForced() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", false); }
+
+/// The most pairs of one segment that the counting order ranks (each pair of a segment reads the
+/// whole segment): kSegmentMax, or KDET_FCL_CUDA_COUNT_ORDER_SEGMENT (1 .. kSegmentMaxLimit).
+/// Read at every query.
+unsigned int segmentMax() {
+  return static_cast<unsigned int>(detail::numberKnob("KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", 1,
+                                                      kSegmentMaxLimit, kSegmentMax));
+}
 
 /// The candidates one round of a query may hold per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES
 /// = k from 0 to 2^20, read at every query; default 14; 0: no limit). A query whose phase 1
@@ -2382,6 +2392,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   const int seg_shift = std::max(0, upper_bits - kSegmentBits);
   const std::size_t segments = std::size_t(1) << (upper_bits - seg_shift);
   const bool counting = countOrderAllowed();
+  const unsigned int seg_max = segmentMax();
   if (counting) ctx.segs.reserve(segments);
   while (true) {
     ++passes;
@@ -2396,7 +2407,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                         PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32},
                         PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits,
                                  counting ? ctx.segs.data() : nullptr, seg_shift,
-                                 w + kBigSegment},
+                                 w + kBigSegment, seg_max},
                         plan.at(r));
       checkLaunch();
       if (rounds > 1) {
@@ -2461,7 +2472,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   // Two meshes hashed as one (split > 0) carry their kinds, which are counted over all m.
   const std::size_t give = dev != nullptr ? std::min(m, dev->capacity) : m;
   if (dev != nullptr) dev->count = m;
-  // Ordered by counting when no segment holds more than kSegmentMax pairs and there are enough
+  // Ordered by counting when no segment holds more than segmentMax() pairs and there are enough
   // pairs (or KDET_FCL_CUDA_COUNT_ORDER=1), else sorted.
   const bool counted =
       counting && h[kBigSegment] == 0 && (n >= kCountOrderMinPairs || countOrderForced());
@@ -3125,6 +3136,7 @@ void readEveryKnob() {
   (void)capacityKnob();
   (void)planeFilterOn();
   (void)countOrderAllowed();
+  (void)segmentMax();
   (void)roundCandidateLimit(1);
   (void)tileSize();
   (void)spansFor(0);

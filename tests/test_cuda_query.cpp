@@ -400,6 +400,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_ORDER", on_off, not_on_off},
+      {"KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", {"1", "256", "65536"}, {"0", "65537", "1k"}},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
@@ -1440,7 +1441,8 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // self, inter and joint queries, meshes whose segments span several first indices (more than
   // 2^16 triangles), max_pairs, a buffer on the device smaller than the pairs, forced overflows,
   // and fans: 256 pairs in one segment (counted when forced), 257 (sorted), 80 fans of 60 (4,800
-  // pairs: counted by default).
+  // pairs: counted by default); with KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=300, segments of 300
+  // (counted when forced) and 301 (sorted), and 20 fans of 257 (5,140 pairs: counted by default).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -1563,13 +1565,22 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
                      }),
               std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + third));
   }
-  // Fans: the segment of each large triangle holds exactly k pairs.
-  for (const auto& fk : {std::make_pair(1, 256), std::make_pair(1, 257), std::make_pair(80, 60)}) {
-    const std::size_t fans = fk.first, k = fk.second;
+  // Fans: the segment of each large triangle holds exactly k pairs; the most a counted segment
+  // may hold is 256, or KDET_FCL_CUDA_COUNT_ORDER_SEGMENT (`most`: 300 here).
+  struct Fans {
+    std::size_t fans, k;
+    const char* most;
+  };
+  for (const Fans fk : {Fans{1, 256, nullptr}, Fans{1, 257, nullptr}, Fans{80, 60, nullptr},
+                        Fans{1, 300, "300"}, Fans{1, 301, "300"}, Fans{20, 257, "300"}}) {
+    const std::size_t fans = fk.fans, k = fk.k;
+    kdet_test::ScopedEnv most("KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", fk.most);
+    const std::size_t limit = fk.most ? std::size_t(std::atoi(fk.most)) : 256;
     const HashedMesh<S> m(makeFans<S>(fans, k));
-    const std::string what = std::to_string(fans) + " fans of " + std::to_string(k);
+    const std::string what = std::to_string(fans) + " fans of " + std::to_string(k) +
+                             ", segments of at most " + std::to_string(limit);
     const std::vector<TrianglePair> pairs =
-        orders(what, fans * k >= 4096 && k <= 256, k <= 256, selfPairs(m));
+        orders(what, fans * k >= 4096 && k <= limit, k <= limit, selfPairs(m));
     ASSERT_EQ(pairs.size(), fans * k) << what;
     for (std::size_t f = 0; f < fans; ++f)
       for (std::size_t i = 0; i < k; ++i) {
