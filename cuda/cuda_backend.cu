@@ -95,7 +95,7 @@ enum PairCountWord : int {
 // kSegmentMax (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT: segmentMax()) (else the radix sort runs: a few
 // thousand keys fit its single-tile sort, and a segment's rank reads the whole segment).
 constexpr int kSegmentBits = 16;
-constexpr unsigned int kSegmentMax = 256;
+constexpr unsigned int kSegmentMax = 1024;
 constexpr unsigned int kSegmentMaxLimit = 65536;  // the knob's largest value
 constexpr unsigned long long kCountOrderMinPairs = 4096;
 constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
@@ -761,9 +761,10 @@ __device__ __forceinline__ bool sameMesh(std::uint32_t split, std::uint32_t i, s
 
 /// The self query's emit rule: a pair of one mesh that shares a vertex is adjacent, not a
 /// candidate. by_index (indexAdjacency()): phase 1 drops only the pairs that share a vertex
-/// index, and the pairs that share a vertex by its coordinates alone are dropped after it (by
-/// the plane filter, coordsAdjacent, or the self exact kernel, which tests both), so phase 1
-/// never waits for the vertices; else phase 1 drops both kinds.
+/// index, so it never waits for the vertices; the pairs that share a vertex by its coordinates
+/// alone are then candidates, which the plane filter keeps (their shared vertex lies on the
+/// other triangle's plane, which it cannot prove off) and the self exact kernel drops (it tests
+/// both kinds of adjacency). Else phase 1 drops both kinds.
 template <class S>
 __device__ __forceinline__ bool selfCandidate(const HashView<S>& M, std::uint32_t split,
                                               std::uint32_t i, std::uint32_t j, bool by_index) {
@@ -1205,25 +1206,8 @@ __device__ __forceinline__ bool strictlyOneSide(const Vec3<S>* __restrict__ qv,
   return detail::orient3dFilterSign(plane, detail::toDouble(pv[pt[2]])) == s;
 }
 
-/// Whether two triangles of one mesh (vertices v, indices at ti and tj) share a vertex by its
-/// coordinates: the adjacency rule's second half (adjacentTriangles), for the pairs that phase 1
-/// passed by index alone (selfCandidate's by_index).
-template <class S>
-__device__ __forceinline__ bool coordsAdjacent(const Vec3<S>* __restrict__ v,
-                                               const std::uint32_t* __restrict__ ti,
-                                               const std::uint32_t* __restrict__ tj) {
-  const Vec3<S> a[3] = {v[ti[0]], v[ti[1]], v[ti[2]]};
-  const Vec3<S> b[3] = {v[tj[0]], v[tj[1]], v[tj[2]]};
-  bool adjacent = false;
-  for (int x = 0; x < 3; ++x)
-    for (int y = 0; y < 3; ++y) adjacent = adjacent || a[x] == b[y];
-  return adjacent;
-}
-
 /// Between phases 1 and 2 (Predicate::Exact only): one thread per candidate drops the pair when
-/// either triangle lies, provably, strictly on one side of the other's plane, or (coords: a self
-/// query whose phase 1 applied the adjacency rule by index only) when the two triangles belong
-/// to one mesh (split as in sameMesh) and share a vertex by coordinates; the survivors are
+/// either triangle lies, provably, strictly on one side of the other's plane; the survivors are
 /// appended to `out` (the same (i << 32) | j keys) for the exact kernel. Every dropped pair is one
 /// the exact test rejects, so the result set cannot change; the exact kernel (128 registers, low
 /// occupancy) then runs on several times fewer pairs. Inter queries pass A's mapped vertices as
@@ -1235,15 +1219,12 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
                       const unsigned long long* count, unsigned long long capacity,
                       const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
                       const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
-                      bool coords, std::uint32_t split, PairSink out) {
+                      PairSink out) {
   const unsigned long long m = *count < capacity ? *count : capacity;
   for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
        k += gridDim.x * blockDim.x) {
     const unsigned long long c = cand[k];
     const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-    if (coords && sameMesh(split, i, j) &&
-        coordsAdjacent(va, ta + 3 * std::size_t(i), ta + 3 * std::size_t(j)))
-      continue;
     const bool drop = strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
                       strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j));
     if (!drop) emitPair(out, i, j);
@@ -2666,7 +2647,7 @@ bool sizeByLevel() { return detail::switchKnob("KDET_FCL_CUDA_SIZE_BY_LEVEL", tr
 
 /// Whether a self query's phase 1 applies the adjacency rule by vertex index only
 /// (selfCandidate's by_index: the entry's indices come with its box, and the pairs that share a
-/// vertex by coordinates alone are dropped by the plane filter or the exact kernel), for a mesh
+/// vertex by coordinates alone are dropped by the exact kernel), for a mesh
 /// (or two hashed as one) of nv vertices and nt triangles: KDET_FCL_CUDA_INDEX_ADJACENCY = 0
 /// (never), 1 (always), unset (when nv <= 1.5 nt: a mesh whose triangles share their vertices,
 /// about nt / 2 of them, where few pairs share a vertex by coordinates alone; a soup of
@@ -2809,14 +2790,14 @@ int filterMinBlocks() {
 template <class S>
 void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
                        const std::uint32_t* ta, const Vec3<S>* vb, const std::uint32_t* tb,
-                       bool coords, std::uint32_t split, const PairSink& surv) {
+                       const PairSink& surv) {
   const auto blocks = static_cast<unsigned int>(8 * g_num_sms);
   if (filterMinBlocks() == 1)
-    planeFilterKernel<S, 1><<<blocks, kFilterBlock, 0, s>>>(
-        cand.pairs, cand.count, cand.capacity, va, ta, vb, tb, coords, split, surv);
+    planeFilterKernel<S, 1><<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity,
+                                                            va, ta, vb, tb, surv);
   else
-    planeFilterKernel<S, 6><<<blocks, kFilterBlock, 0, s>>>(
-        cand.pairs, cand.count, cand.capacity, va, ta, vb, tb, coords, split, surv);
+    planeFilterKernel<S, 6><<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity,
+                                                            va, ta, vb, tb, surv);
   checkLaunch();
 }
 
@@ -2924,7 +2905,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
-      launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, false, 0, surv);
+      launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, surv);
       in = surv;
     }
     ctx.markRound(round.serial, 2);
@@ -3013,7 +2994,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
-      launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, by_index, split, surv);
+      launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, surv);
       in = surv;
     }
     ctx.markRound(round.serial, 2);

@@ -53,8 +53,13 @@
 // while the mesh's last self query found at most 4 candidates per triangle). The pairs are put
 // in (a, b) order by counting them per segment of first indices as the exact tests emit them (a
 // scan, a scatter, a rank within each segment) when there are at least 4096 and no segment holds
-// more than 256, else by the radix sort; KDET_FCL_CUDA_COUNT_ORDER=0 always sorts, =1 counts
-// whatever the number of pairs (read at every query). Uploads of deformed
+// more than 1024 (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=n: n), else by the radix sort;
+// KDET_FCL_CUDA_COUNT_ORDER=0 always sorts, =1 counts whatever the number of pairs (read at every
+// query). The warp-wide candidate scan passes the entries of the levels above a query's own by
+// the size rule without loading their diameters (KDET_FCL_CUDA_SIZE_BY_LEVEL=0 loads them), and
+// a self query of a mesh of at most 1.5 vertices per triangle applies the adjacency rule by
+// vertex index in phase 1, leaving the pairs that share a vertex by coordinates alone to the
+// exact kernel (KDET_FCL_CUDA_INDEX_ADJACENCY=0|1: never, always; read at every query). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host
 // threads (cuda/staged_upload.h); KDET_FCL_CUDA_UPLOAD_THREADS=n and KDET_FCL_CUDA_UPLOAD_CHUNK=b
 // force the thread count and the chunk size (read at every upload). A vertex array of 256 KiB or
@@ -178,7 +183,8 @@ struct QueryProfile {
                               ///< level by the size rule unloaded (KDET_FCL_CUDA_SIZE_BY_LEVEL)
   bool index_adjacency = false;  ///< a self query's phase 1 dropped the pairs sharing a vertex by
                                  ///< index only; those sharing one by coordinates alone were
-                                 ///< candidates, dropped later (KDET_FCL_CUDA_INDEX_ADJACENCY)
+                                 ///< candidates, dropped by the exact kernel
+                                 ///< (KDET_FCL_CUDA_INDEX_ADJACENCY)
   bool warp_tasks = false;  ///< its warps took their queries from a counter (a grid of the
                             ///< resident warps; KDET_FCL_CUDA_WARP_TASKS=0: one warp per task)
   bool cells_by_size = false;  ///< the queried meshes' cells list their triangles by decreasing
@@ -194,7 +200,7 @@ struct QueryProfile {
                        ///< (KDET_FCL_CUDA_JOINT)
   bool pairs_counted = false;  ///< the pairs were put in order by counting them per segment of
                                ///< first indices, not by the radix sort (fewer than 4096 pairs or
-                               ///< a segment of more than 256: the sort; KDET_FCL_CUDA_COUNT_ORDER
+                               ///< a segment of more than 1024: the sort; KDET_FCL_CUDA_COUNT_ORDER
                                ///< =0: always the sort, =1: counted whatever the pair count).
                                ///< False when no pair was delivered (none found, or capacity 0)
 };
