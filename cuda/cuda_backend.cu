@@ -2647,12 +2647,12 @@ bool sizeByLevel() { return detail::switchKnob("KDET_FCL_CUDA_SIZE_BY_LEVEL", tr
 
 /// Whether a self query's phase 1 applies the adjacency rule by vertex index only
 /// (selfCandidate's by_index: the entry's indices come with its box, and the pairs that share a
-/// vertex by coordinates alone are dropped by the exact kernel), for a mesh
-/// (or two hashed as one) of nv vertices and nt triangles: KDET_FCL_CUDA_INDEX_ADJACENCY = 0
-/// (never), 1 (always), unset (when nv <= 1.5 nt: a mesh whose triangles share their vertices,
-/// about nt / 2 of them, where few pairs share a vertex by coordinates alone; a soup of
-/// unshared vertices, 3 nt of them, would pass every neighbour pair to the filter). Read at every
-/// query; the pairs are the same either way.
+/// vertex by coordinates alone are dropped by the exact kernel), for a mesh (or two hashed as
+/// one) of nv vertices and nt triangles: KDET_FCL_CUDA_INDEX_ADJACENCY = 0 (never), 1 (always),
+/// unset (when nv <= 1.5 nt: a mesh whose triangles share their vertices, about nt / 2 of them,
+/// where few pairs share a vertex by coordinates alone; a soup of unshared vertices, 3 nt of
+/// them, would pass every neighbour pair to the exact kernel). Read at every query; the pairs are
+/// the same either way.
 bool indexAdjacency(std::size_t nv, std::size_t nt) {
   return detail::switchKnob("KDET_FCL_CUDA_INDEX_ADJACENCY", 2 * nv <= 3 * nt);
 }
