@@ -6,10 +6,10 @@
 # segments of at most 256 (the default), 1024 and 4096 pairs (one CSV, round and limit in
 # front); then ncu kernel durations of the cloth ball's self query with the default and with
 # KDET_FCL_CUDA_SIZE_BY_LEVEL=0 KDET_FCL_CUDA_INDEX_ADJACENCY=0 (the tree before this session),
-# summed per frame on the device by kernels_per_frame.py (a copy of gpu-h100-profile's).
+# summed per frame on the device by gpu-h100-profile's kernels_per_frame.py (the call ran a
+# byte-identical copy in this folder, since removed).
 set -u
 cd "$(dirname "$0")/../../.."
-HERE=benchmarks/results/gpu-h100-indexadj
 T=$OUT/times.txt
 date > $T
 export KDET_FCL_DATA_DIR=$PWD/.gpu-data
@@ -45,6 +45,6 @@ for C in new old; do
     build-gpu/benchmarks/gpu_bench --no-fcl --no-cpu --repeats 1 --only unc-cloth-ball-self \
     > /tmp/chk/ncu-$C.csv 2> /tmp/chk/ncu-$C.err
   echo "ncu $C rc=$?" >> $T
-  { echo "== $C"; python3 $HERE/kernels_per_frame.py /tmp/chk/ncu-$C.csv; } >> $OUT/kernels.txt 2>&1
+  { echo "== $C"; python3 benchmarks/results/gpu-h100-profile/kernels_per_frame.py /tmp/chk/ncu-$C.csv; } >> $OUT/kernels.txt 2>&1
   date >> $T
 done
