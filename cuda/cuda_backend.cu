@@ -907,8 +907,8 @@ template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
                              std::uint32_t max_visit, int level_skip, bool size_by_level,
-                             bool range_with_key, bool by_index, std::uint32_t split,
-                             Round round, PairSink cand, unsigned long long* tasks) {
+                             bool by_index, std::uint32_t split, Round round, PairSink cand,
+                             unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -932,7 +932,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
     }
     scanCandidatesWarp<kSpans>(
-        M, cInfo(0), q, mine, log_p, max_visit, by_index, range_with_key,
+        M, cInfo(0), q, mine, log_p, max_visit, by_index,
         [&](const WarpQuery& o, std::uint32_t j, double dj) {
           return dj > o.d || (dj == o.d && j > o.id);
         },
@@ -1072,8 +1072,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                               std::uint32_t na, std::uint32_t nb, bool identity,
                               Transform<double> b_to_a, double eps_coef, double eps_tmag,
                               unsigned int log_p, std::uint32_t max_visit, bool size_by_level,
-                              bool range_with_key, Round round, PairSink cand,
-                              unsigned long long* tasks) {
+                              Round round, PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -1112,12 +1111,12 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     }
     if (a_side)
       scanCandidatesWarp<kSpans>(
-          B, target, q, mine, log_p, max_visit, false, range_with_key,
+          B, target, q, mine, log_p, max_visit, false,
           [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
           [&](const WarpQuery& o, std::uint32_t j, const TriIndices&) { emitPair(cand, o.id, j); });
     else
       scanCandidatesWarp<kSpans>(
-          A, target, q, mine, log_p, max_visit, false, range_with_key,
+          A, target, q, mine, log_p, max_visit, false,
           [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
           [&](const WarpQuery& o, std::uint32_t i, const TriIndices&) { emitPair(cand, i, o.id); });
   });
@@ -2646,11 +2645,6 @@ bool dynamicWarpTasks() { return detail::switchKnob("KDET_FCL_CUDA_WARP_TASKS", 
 /// benchmarks can compare the two; both give the same candidates.
 bool sizeByLevel() { return detail::switchKnob("KDET_FCL_CUDA_SIZE_BY_LEVEL", true); }
 
-/// Whether the warp-wide scan loads each cell's entry range beside its key (findCellWith<true>:
-/// one round trip less per visited cell): KDET_FCL_CUDA_RANGE_WITH_KEY unset or 1; 0 loads it
-/// once the key has confirmed the cell. Read at every query; both give the same candidates.
-bool rangeWithKey() { return detail::switchKnob("KDET_FCL_CUDA_RANGE_WITH_KEY", true); }
-
 /// Whether a self query's phase 1 applies the adjacency rule by vertex index only
 /// (selfCandidate's by_index: the entry's indices come with its box, and the pairs that share a
 /// vertex by coordinates alone are dropped by the exact kernel), for a mesh (or two hashed as
@@ -2874,11 +2868,9 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const bool spans = spansFor(std::max(A.inter_density, B.inter_density));
   const bool warp = warpScan();
   const bool size_by_level = warp && sizeByLevel();
-  const bool range_with_key = warp && rangeWithKey();
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
-  ctx.profile.range_with_key = range_with_key;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
@@ -2896,8 +2888,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
       const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
       kernel<<<wl.blocks, kQueryBlock, 0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a,
                                                eps_coef, eps_tmag, log_p, warpVisit(),
-                                               size_by_level, range_with_key, round, cand,
-                                               wl.tasks);
+                                               size_by_level, round, cand, wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -2952,12 +2943,10 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   const bool cell_pairs = selfCellPairs(M.info.entries);
   const int level_skip = cell_pairs ? 1 : 0;
   const bool size_by_level = warp && sizeByLevel();
-  const bool range_with_key = warp && rangeWithKey();
   const bool by_index = indexAdjacency(M.nv, n);
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
-  ctx.profile.range_with_key = range_with_key;
   ctx.profile.index_adjacency = by_index;
   ctx.profile.self_cell_pairs = cell_pairs;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
@@ -2988,8 +2977,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
         const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
         const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
         kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip,
-                                                 size_by_level, range_with_key, by_index, split,
-                                                 round, cand, wl.tasks);
+                                                 size_by_level, by_index, split, round, cand,
+                                                 wl.tasks);
       } else {
         withTile([&](auto g, auto mb) {
           constexpr int G = decltype(g)::value;
@@ -3137,7 +3126,6 @@ void readEveryKnob() {
   (void)warpVisit();
   (void)dynamicWarpTasks();
   (void)sizeByLevel();
-  (void)rangeWithKey();
   (void)indexAdjacency(0, 0);
   (void)selfCellPairs(0);
   (void)cellRows(0, 0);

@@ -201,15 +201,10 @@ __host__ __device__ __forceinline__ unsigned long long slotValue(unsigned long l
 /// The cell index of cell (L, x, y, z), or -1 when no triangle occupies that cell. The 32 high
 /// hash bits in the slot only skip most mismatches cheaply; a match is confirmed on the full key
 /// (the compact 64-bit key, exact for coordinates inside the bounds, or the 128-bit one), so a
-/// bucket or fingerprint collision can neither invent nor lose a candidate. kRange: also the
-/// cell's entries [begin, end), loaded beside the full key on a fingerprint match rather than
-/// after the key confirmed it, so the caller waits for one round trip less (another cell's
-/// fingerprint match, whose range is then dropped, is rare; its index is a stored cell's, so the
-/// loads stay in bounds).
-template <bool kRange, class S>
-__device__ __forceinline__ int findCellWith(const HashView<S>& h, const BuildInfo& info, int L,
-                                            std::int64_t x, std::int64_t y, std::int64_t z,
-                                            std::uint32_t& begin, std::uint32_t& end) {
+/// bucket or fingerprint collision can neither invent nor lose a candidate.
+template <class S>
+__device__ __forceinline__ int findCell(const HashView<S>& h, const BuildInfo& info, int L,
+                                        std::int64_t x, std::int64_t y, std::int64_t z) {
   const detail::CellKey key = detail::makeCellKey(L, x, y, z);
   const unsigned long long hash = detail::hashCellKey(key);
   const unsigned int fp = static_cast<unsigned int>(hash >> 32);
@@ -221,32 +216,15 @@ __device__ __forceinline__ int findCellWith(const HashView<S>& h, const BuildInf
     if (s == kEmptySlot) return -1;
     if (static_cast<unsigned int>(s >> 32) == fp) {
       const unsigned int c = static_cast<unsigned int>(s);
-      std::uint32_t b = 0, e = 0;
-      if (kRange) {
-        b = __ldg(h.cell_begin + c);
-        e = __ldg(h.cell_begin + c + 1);
-      }
-      const bool hit = compact ? __ldg(h.cell_key + c) == ck
-                               : (__ldg(h.cell_key + 2 * std::size_t(c)) == key.hi) &
-                                     (__ldg(h.cell_key + 2 * std::size_t(c) + 1) == key.lo);
-      if (hit) {
-        if (kRange) {
-          begin = b;
-          end = e;
-        }
+      if (compact) {
+        if (__ldg(h.cell_key + c) == ck) return static_cast<int>(c);
+      } else if (__ldg(h.cell_key + 2 * std::size_t(c)) == key.hi &&
+                 __ldg(h.cell_key + 2 * std::size_t(c) + 1) == key.lo) {
         return static_cast<int>(c);
       }
     }
     i = nextSlot(i, h.slot_count);
   }
-}
-
-/// findCellWith, the cell index alone.
-template <class S>
-__device__ __forceinline__ int findCell(const HashView<S>& h, const BuildInfo& info, int L,
-                                        std::int64_t x, std::int64_t y, std::int64_t z) {
-  std::uint32_t unused_begin = 0, unused_end = 0;
-  return findCellWith<false>(h, info, L, x, y, z, unused_begin, unused_end);
 }
 
 /// The high 32 bits of a non-negative diameter's bit pattern: monotone in the diameter (the same
@@ -482,9 +460,8 @@ template <bool kSpans, class S>
 __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const BuildInfo& info,
                                                    const WarpQuery& mine, std::uint32_t max_visit,
                                                    unsigned int P, unsigned int sub,
-                                                   bool range_with_key, LookupCursor& c,
-                                                   std::uint32_t& begin, unsigned int& ends,
-                                                   std::uint32_t& qspan) {
+                                                   LookupCursor& c, std::uint32_t& begin,
+                                                   unsigned int& ends, std::uint32_t& qspan) {
   std::uint32_t end = 0;
   if (c.rest_begin < c.rest_end) {
     begin = c.rest_begin;
@@ -494,9 +471,7 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
     int cell = -1;
     while (cell < 0 && c.L <= info.top_level) {
       if ((c.pos++ & (P - 1)) == sub) {
-        const std::int64_t x = c.lo[0] + c.dx, y = c.lo[1] + c.dy, z = c.lo[2] + c.dz;
-        cell = range_with_key ? findCellWith<true>(h, info, c.L, x, y, z, begin, end)
-                              : findCell(h, info, c.L, x, y, z);
+        cell = findCell(h, info, c.L, c.lo[0] + c.dx, c.lo[1] + c.dy, c.lo[2] + c.dz);
         if (cell >= 0) {
           ends = cellEnds(c.dx, c.dy, c.dz, c.n[0], c.n[1], c.n[2]);
           if (kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
@@ -512,10 +487,8 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
       }
     }
     if (cell < 0) return 0;
-    if (!range_with_key) {
-      begin = __ldg(h.cell_begin + cell);
-      end = __ldg(h.cell_begin + cell + 1);
-    }
+    begin = __ldg(h.cell_begin + cell);
+    end = __ldg(h.cell_begin + cell + 1);
   }
   const std::uint32_t count = end - begin < max_visit ? end - begin : max_visit;
   c.rest_begin = begin + count;
@@ -555,8 +528,7 @@ __device__ __forceinline__ int warpOwnerOf(std::uint32_t incl, std::uint32_t t) 
 /// price of the size rule's early exit: an entry smaller than its query is rejected by accept()
 /// after its diameter is loaded instead of ending the cell. A larger P gives a small query set more
 /// warps. emit(query, j, tj) gets entry j's vertex indices tj when `load_tri` (loaded beside its
-/// box, for a self query's adjacency rule), else zeros. range_with_key: each cell's entry range
-/// is loaded beside its key (findCellWith<true>), else after it.
+/// box, for a self query's adjacency rule), else zeros.
 /// accept(q_owner, j, d_j) and emit(q_owner, j) get the slot of the query that the entry is tested
 /// against. max_visit: 1..kMaxWarpVisit. The query's levels (query.levels) as scanCandidatesGroup's.
 /// Every lane of the warp must call, with warp-uniform arguments except `query`.
@@ -565,8 +537,7 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
                                                    WarpQuery* q,
                                                    const WarpQuery& query, unsigned int log_p,
                                                    std::uint32_t max_visit, bool load_tri,
-                                                   bool range_with_key, Accept&& accept,
-                                                   Emit&& emit) {
+                                                   Accept&& accept, Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
   const unsigned int P = 1u << log_p;
@@ -588,8 +559,7 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
     std::uint32_t begin = 0, qspan = detail::kWholeCellSpan;
     unsigned int ends = 0;
     const std::uint32_t count =
-        nextVisit<kSpans>(h, info, mine, max_visit, P, sub, range_with_key, c, begin, ends,
-                          qspan);
+        nextVisit<kSpans>(h, info, mine, max_visit, P, sub, c, begin, ends, qspan);
     // Lane o owns the warp's entries [incl_o - count_o, incl_o).
     const std::uint32_t incl = warpInclusiveSum(count);
     const std::uint32_t total = __shfl_sync(kFull, incl, 31);

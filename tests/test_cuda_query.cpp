@@ -405,7 +405,6 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
       {"KDET_FCL_CUDA_SIZE_BY_LEVEL", on_off, not_on_off},
-      {"KDET_FCL_CUDA_RANGE_WITH_KEY", on_off, not_on_off},
       {"KDET_FCL_CUDA_INDEX_ADJACENCY", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_CELLS", on_off, not_on_off},
       {"KDET_FCL_CUDA_JOINT", on_off, not_on_off},
@@ -975,8 +974,7 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   // from the cells or scanning every level from the query's own (KDET_FCL_CUDA_SELF_CELLS=1 or 0;
   // unset, these meshes are far below the size from which the cells are used by default), and
   // with the warp scan passing the entries above each query's own level by the size rule without
-  // their diameters or loading and testing every one (KDET_FCL_CUDA_SIZE_BY_LEVEL=1 or 0), and
-  // loading each cell's entry range beside its key or after it (KDET_FCL_CUDA_RANGE_WITH_KEY).
+  // their diameters or loading and testing every one (KDET_FCL_CUDA_SIZE_BY_LEVEL=1 or 0).
   // Scenes: a stack of 60 crossing sheets (cells of hundreds of entries, more than one warp round
   // per cell), a random soup of many sizes (many levels), a mesh of fewer than 32 triangles (one
   // partial warp), a triangle count that is no multiple of 32, and inter queries under a pose
@@ -1044,7 +1042,6 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
     bool rebuild;       // re-hash every mesh under this mode first (cuda::markDeformed)
     const char* cells = nullptr;  // KDET_FCL_CUDA_SELF_CELLS
     const char* by_level = nullptr;  // KDET_FCL_CUDA_SIZE_BY_LEVEL
-    const char* with_key = nullptr;  // KDET_FCL_CUDA_RANGE_WITH_KEY
   };
   // The cells list their triangles by size only when a mesh was last built under the tile scan
   // (whose early exit needs that order); the tile scan must also be right on cells built for the
@@ -1054,22 +1051,20 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   for (const Mode m :
        {Mode{"tile", "0", nullptr, nullptr, nullptr, true, "0"},
         Mode{"warp", "0", "1", nullptr, nullptr, false, "1"},
-        Mode{"warp", "1", "2", nullptr, "0", true, "0", "0", "0"},
+        Mode{"warp", "1", "2", nullptr, "0", true, "0", "0"},
         Mode{"tile", "1", nullptr, nullptr, nullptr, false, "1"},
         Mode{"warp", "0", "4", "3", nullptr, false, "1", "0"},
-        Mode{"warp", "1", "8", "1", "0", false, "1", "1", "0"},
-        Mode{"warp", "0", "32", "3", "1", false, "0", "0", "1"},
+        Mode{"warp", "1", "8", "1", "0", false, "1", "1"},
+        Mode{"warp", "0", "32", "3", "1", false, "0", "0"},
         Mode{"warp", "1", "1", "1", nullptr, true, "1"},
         Mode{"tile", "0", nullptr, nullptr, nullptr, true},
         Mode{nullptr, "0", nullptr, nullptr, "0", false}}) {
     kdet_test::ScopedEnv scan("KDET_FCL_CUDA_SCAN", m.scan), spans("KDET_FCL_CUDA_SPANS", m.spans),
         lanes("KDET_FCL_CUDA_WARP_LANES", m.lanes), visit("KDET_FCL_CUDA_WARP_VISIT", m.visit),
         tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks), cells("KDET_FCL_CUDA_SELF_CELLS", m.cells),
-        by_level("KDET_FCL_CUDA_SIZE_BY_LEVEL", m.by_level),
-        with_key("KDET_FCL_CUDA_RANGE_WITH_KEY", m.with_key);
+        by_level("KDET_FCL_CUDA_SIZE_BY_LEVEL", m.by_level);
     const bool cell_pairs = m.cells != nullptr && *m.cells == '1';
     const bool size_by_level = m.by_level == nullptr || *m.by_level == '1';
-    const bool range_with_key = m.with_key == nullptr || *m.with_key == '1';
     const bool warp = m.scan == nullptr || std::string(m.scan) == "warp";
     const bool dynamic = m.tasks == nullptr || *m.tasks != '0';
     if (m.rebuild) {
@@ -1080,8 +1075,7 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
                              ", lanes " + (m.lanes ? m.lanes : "-") + ", visit " +
                              (m.visit ? m.visit : "-") + ", tasks " + (m.tasks ? m.tasks : "-") +
                              ", self cells " + (m.cells ? m.cells : "-") + ", size by level " +
-                             (m.by_level ? m.by_level : "-") + ", range with key " +
-                             (m.with_key ? m.with_key : "-") +
+                             (m.by_level ? m.by_level : "-") +
                              (m.rebuild ? ", rebuilt" : "");
     for (auto& q : queries) {
       const QueryResult gpu = q.run(on(Backend::Cuda));
@@ -1090,7 +1084,6 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
       EXPECT_EQ(p.warp_scan, warp) << mode;
       EXPECT_EQ(p.warp_tasks, warp && dynamic) << mode;
       EXPECT_EQ(p.size_by_level, warp && size_by_level) << mode;
-      EXPECT_EQ(p.range_with_key, warp && range_with_key) << mode;
       EXPECT_EQ(p.cells_by_size, built_for_tile) << q.what << " (" << mode << ")";
       if (!warp) EXPECT_EQ(p.warp_lanes, 0) << mode;
       if (warp && m.lanes) EXPECT_EQ(p.warp_lanes, std::atoi(m.lanes)) << mode;

@@ -1,6 +1,7 @@
 #!/bin/bash
 # Fourth device call (carry .fcl-debs and .gpu-data; 600 s): the warp scan loads each cell's
-# entry range beside its key (KDET_FCL_CUDA_RANGE_WITH_KEY, new, default on). Builds every CUDA
+# entry range beside its key (KDET_FCL_CUDA_RANGE_WITH_KEY, new, default on). It ran on commit
+# c03168d; it measured level and was reverted, so this script no longer applies to main. Builds every CUDA
 # test program and gpu_bench; ctest -L cuda; memcheck of the scan-modes test; gpu_bench on the
 # UNC scenes and the 90k, 250k and 1M cloths in six alternating rounds (the default, then
 # KDET_FCL_CUDA_RANGE_WITH_KEY=0; one CSV, round and configuration in front); then ncu kernel
