@@ -1,7 +1,8 @@
 #!/bin/bash
 # Fifth device call (carry .fcl-debs and .gpu-data; 600 s): the cells' pairs load a partner's
 # sub-cell span beside its entry, before the canonical-cell test (KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY,
-# new, default on; gpu-h100-stalls: the kernel stalls on L1TEX data 66 % of its cycles). Builds
+# new, default on; gpu-h100-stalls: the kernel stalls on L1TEX data 66 % of its cycles). It ran
+# on commit d2a9d41; it measured level and was reverted, so this script no longer applies to main. Builds
 # test_cuda_query and gpu_bench; ctest -L cuda of test_cuda_query; memcheck of the cells test
 # (float); gpu_bench on the UNC scenes and the 90k, 250k and 1M cloths in six alternating rounds
 # (the default, then KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY=0; one CSV); ncu kernel durations of the
