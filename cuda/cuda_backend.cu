@@ -980,8 +980,8 @@ template <class S, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, 8)
     selfCellPairsKernel(HashView<S> M, const std::uint32_t* __restrict__ block_cell,
                         std::uint32_t cell_cap, std::uint32_t rows, std::uint32_t max_visit,
-                        bool by_index, bool span_with_entry, std::uint32_t split, Round round,
-                        PairSink cand, unsigned long long* tasks) {
+                        bool by_index, std::uint32_t split, Round round, PairSink cand,
+                        unsigned long long* tasks) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
   __shared__ TriIndices row_tris[kQueryBlock / 32][32];  // (by_index)
@@ -1043,14 +1043,9 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
         if (bpos >= m) bpos -= m;
         const std::uint32_t b = o_begin + bpos;
         const std::uint32_t w = __ldg(M.entry_tri + b);
-        // (span_with_entry: the partner's span is loaded beside its entry, not after the
-        // canonical-cell test.)
-        const std::uint32_t early_span = kSpans && span_with_entry ? __ldg(M.entry_span + b) : 0u;
         // This cell is the pair's canonical cell, and (kSpans) their spans overlap in it.
         if (((o_v | w) >> 29) != 7u) continue;
-        if (kSpans && !detail::subcellSpansOverlap(
-                          o_span, span_with_entry ? early_span : __ldg(M.entry_span + b)))
-          continue;
+        if (kSpans && !detail::subcellSpansOverlap(o_span, __ldg(M.entry_span + b))) continue;
         const std::uint32_t i = o_v & kEntryTriMask, j = w & kEntryTriMask;
         const Aabb<S> e = loadBoxOf(M.box + j);
         // (by_index: the partner's vertex indices come in the same round trip as its box.)
@@ -2650,13 +2645,6 @@ bool dynamicWarpTasks() { return detail::switchKnob("KDET_FCL_CUDA_WARP_TASKS", 
 /// benchmarks can compare the two; both give the same candidates.
 bool sizeByLevel() { return detail::switchKnob("KDET_FCL_CUDA_SIZE_BY_LEVEL", true); }
 
-/// Whether the cells' pairs (with sub-cell spans) load a partner's span beside its entry, before
-/// the canonical-cell test, rather than after it: KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY unset or 1;
-/// 0: after. Read at every query; both give the same candidates.
-bool cellSpanWithEntry() {
-  return detail::switchKnob("KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY", true);
-}
-
 /// Whether a self query's phase 1 applies the adjacency rule by vertex index only
 /// (selfCandidate's by_index: the entry's indices come with its box, and the pairs that share a
 /// vertex by coordinates alone are dropped by the exact kernel), for a mesh (or two hashed as
@@ -2956,8 +2944,6 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   const int level_skip = cell_pairs ? 1 : 0;
   const bool size_by_level = warp && sizeByLevel();
   const bool by_index = indexAdjacency(M.nv, n);
-  const bool span_with_entry = cell_pairs && spans && cellSpanWithEntry();
-  ctx.profile.cell_span_with_entry = span_with_entry;
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
@@ -2975,8 +2961,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
           kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
       kernel<<<blocks, kQueryBlock, 0, s>>>(mv, M.block_cell.data(),
                                             M.pending ? M.pending_cell_cap : M.cell_cap, rows,
-                                            warpVisit(), by_index, span_with_entry, split,
-                                            round, cand, ctx.cellTasks());
+                                            warpVisit(), by_index, split, round, cand,
+                                            ctx.cellTasks());
       checkLaunch();
       // The round's candidates so far are the cells' (cell_candidates; the stages' rounds).
       addCountKernel<<<1, 1, 0, s>>>(cand.count, ctx.pair_count.data() + kCellCands);
@@ -3140,7 +3126,6 @@ void readEveryKnob() {
   (void)warpVisit();
   (void)dynamicWarpTasks();
   (void)sizeByLevel();
-  (void)cellSpanWithEntry();
   (void)indexAdjacency(0, 0);
   (void)selfCellPairs(0);
   (void)cellRows(0, 0);

@@ -181,8 +181,6 @@ struct QueryProfile {
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)
   bool size_by_level = false;  ///< the warp-wide scan passed the entries above each query's own
                               ///< level by the size rule unloaded (KDET_FCL_CUDA_SIZE_BY_LEVEL)
-  bool cell_span_with_entry = false;  ///< the cells' pairs loaded a partner's span beside its
-                                      ///< entry (KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY; with spans)
   bool index_adjacency = false;  ///< a self query's phase 1 dropped the pairs sharing a vertex by
                                  ///< index only; those sharing one by coordinates alone were
                                  ///< candidates, dropped by the exact kernel

@@ -405,7 +405,6 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
       {"KDET_FCL_CUDA_SIZE_BY_LEVEL", on_off, not_on_off},
-      {"KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY", on_off, not_on_off},
       {"KDET_FCL_CUDA_INDEX_ADJACENCY", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_CELLS", on_off, not_on_off},
       {"KDET_FCL_CUDA_JOINT", on_off, not_on_off},
@@ -1115,9 +1114,7 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
   // with KDET_FCL_CUDA_SYNC_REHASH: another build path), with the cells' partners cut into
   // visits of one entry (KDET_FCL_CUDA_WARP_VISIT=1) or not, with the sub-cell span filter on
   // and off (KDET_FCL_CUDA_SPANS), and with 1 to 32 entries per warp task of the cells' pairs
-  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density and the size), with spans on,
-  // the partner's span loaded beside its entry or after the canonical-cell test
-  // (KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY).
+  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density and the size).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -1137,29 +1134,23 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
     if (sc.crossing) EXPECT_GT(cpu.size(), 0u) << sc.what;
     struct Config {
       const char *full, *visit, *spans, *rows;
-      const char* with_entry = nullptr;  // KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY
     };
     for (const Config c : {Config{"0", "", "1", nullptr}, Config{"0", "1", "0", "1"},
-                           Config{"1", "", "0", "8"}, Config{"1", "1", "1", "32", "0"},
-                           Config{"0", "", "0", "2"}, Config{"0", "", "1", "4", "0"}}) {
+                           Config{"1", "", "0", "8"}, Config{"1", "1", "1", "32"},
+                           Config{"0", "", "0", "2"}}) {
       kdet_test::ScopedEnv keys("KDET_FCL_CUDA_FULL_KEYS", c.full),
           sync("KDET_FCL_CUDA_SYNC_REHASH", c.full), cut("KDET_FCL_CUDA_WARP_VISIT", c.visit),
-          spans("KDET_FCL_CUDA_SPANS", c.spans), rows("KDET_FCL_CUDA_CELL_ROWS", c.rows),
-          with_entry("KDET_FCL_CUDA_CELL_SPAN_WITH_ENTRY", c.with_entry);
+          spans("KDET_FCL_CUDA_SPANS", c.spans), rows("KDET_FCL_CUDA_CELL_ROWS", c.rows);
       cuda::markDeformed(sc.mesh);  // re-hash under these keys
       long long candidates = -1;
       for (const char* cells : {"1", "0"}) {
         kdet_test::ScopedEnv on_off("KDET_FCL_CUDA_SELF_CELLS", cells);
         const std::string what = std::string(sc.what) + ", full keys " + c.full + ", visit '" +
                                  c.visit + "', spans " + c.spans + ", rows " +
-                                 (c.rows ? c.rows : "-") + ", span with entry " +
-                                 (c.with_entry ? c.with_entry : "-") + ", self cells " + cells;
+                                 (c.rows ? c.rows : "-") + ", self cells " + cells;
         EXPECT_EQ(intersectSelf(sc.mesh, on(Backend::Cuda)).pairs, cpu) << what;
         const cuda::QueryProfile p = cuda::lastQueryProfile();
         EXPECT_EQ(p.spans, *c.spans == '1') << what;
-        EXPECT_EQ(p.cell_span_with_entry,
-                  *cells == '1' && *c.spans == '1' && !(c.with_entry && *c.with_entry == '0'))
-            << what;
         if (*cells == '1') {
           EXPECT_TRUE(p.self_cell_pairs) << what;
           if (c.rows) EXPECT_EQ(p.cell_rows, std::atoi(c.rows)) << what;
