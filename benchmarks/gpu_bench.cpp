@@ -259,6 +259,18 @@ Row runScene(const BScene& sc, const Config& cfg) {
       n += q.pairs.size();
       if (sets) sets->push_back(std::move(q.pairs));
     };
+    // After a joint call: when the backend ran the three queries instead (e.g.
+    // KDET_FCL_CUDA_JOINT=0), the profile is the last one's only; warns once (--joint none times
+    // the three queries). `warned`: the call's own flag.
+    auto warnIfNotJoint = [&](const char* call, bool& warned) {
+      if (prof && !cuda::lastQueryProfile().joint && !warned) {
+        std::fprintf(stderr,
+                     "warning: %s did not run joint; device times cover only its last query "
+                     "(use --joint none)\n",
+                     call);
+        warned = true;
+      }
+    };
     // query(buffer, capacity) into on_dev, grown and asked again when its `count(result)` pairs
     // did not fit.
     auto intoBuffer = [&](auto&& query, auto&& count) {
@@ -276,13 +288,8 @@ Row runScene(const BScene& sc, const Config& cfg) {
             return intersectAllOnDevice(H(0, f), H(1, f), p, c, opts(Backend::Cuda));
           },
           [](const AllDevicePairsResult& r) { return r.total(); });
-      if (prof && !cuda::lastQueryProfile().joint) {
-        static bool warned = false;
-        if (!warned)
-          std::fprintf(stderr, "warning: intersectAllOnDevice did not run joint; device times "
-                               "cover only its last query (use --joint none)\n");
-        warned = true;
-      }
+      static bool device_warned = false;
+      warnIfNotJoint("intersectAllOnDevice", device_warned);
       if (sets) {  // the three runs, as intersectAll's three results
         const Pairs p = on_dev->read(d.total());
         const auto ea = p.begin() + std::ptrdiff_t(d.self_a.count);
@@ -314,15 +321,8 @@ Row runScene(const BScene& sc, const Config& cfg) {
     if (joint) {
       AllPairsResult all = intersectAll(H(0, f), H(1, f), opts(Backend::Cuda));
       profiled();
-      if (prof && !cuda::lastQueryProfile().joint) {
-        // The backend ran the three queries (e.g. KDET_FCL_CUDA_JOINT=0): the profile is the
-        // last one's only. Use --joint none to time the three queries.
-        static bool warned = false;
-        if (!warned)
-          std::fprintf(stderr, "warning: intersectAll did not run joint; device times cover "
-                               "only its last query (use --joint none)\n");
-        warned = true;
-      }
+      static bool host_warned = false;
+      warnIfNotJoint("intersectAll", host_warned);
       take(std::move(all.self_a));
       take(std::move(all.self_b));
       take(std::move(all.inter));

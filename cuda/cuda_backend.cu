@@ -738,17 +738,13 @@ __global__ void mapVerticesKernel(std::uint32_t n, const Vec3<S>* __restrict__ v
 template <class S>
 __device__ __forceinline__ bool adjacentTriangles(const HashView<S>& M, std::uint32_t i,
                                                   std::uint32_t j) {
-  const std::uint32_t ti[3] = {__ldg(M.t + 3 * i), __ldg(M.t + 3 * i + 1), __ldg(M.t + 3 * i + 2)};
-  const std::uint32_t tj[3] = {M.t[3 * j], M.t[3 * j + 1], M.t[3 * j + 2]};
+  const TriIndices ti = loadTri(M.t, i), tj = loadTri(M.t, j);
+  if (shareIndex(ti, tj)) return true;
+  const Vec3<S> vi[3] = {M.v[ti.a], M.v[ti.b], M.v[ti.c]};
+  const Vec3<S> vj[3] = {M.v[tj.a], M.v[tj.b], M.v[tj.c]};
   bool adjacent = false;
   for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b];
-  if (!adjacent) {
-    const Vec3<S> vi[3] = {M.v[ti[0]], M.v[ti[1]], M.v[ti[2]]};
-    const Vec3<S> vj[3] = {M.v[tj[0]], M.v[tj[1]], M.v[tj[2]]};
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) adjacent = adjacent || vi[a] == vj[b];
-  }
+    for (int b = 0; b < 3; ++b) adjacent = adjacent || vi[a] == vj[b];
   return adjacent;
 }
 
@@ -757,6 +753,13 @@ __device__ __forceinline__ bool adjacentTriangles(const HashView<S>& M, std::uin
 /// two is an inter-object pair, which counts when it merely touches). split = 0: one mesh.
 __device__ __forceinline__ bool sameMesh(std::uint32_t split, std::uint32_t i, std::uint32_t j) {
   return (i < split) == (j < split);
+}
+
+/// selfCandidate by index, with both triangles' indices at hand.
+__device__ __forceinline__ bool selfCandidateByIndex(std::uint32_t split, std::uint32_t i,
+                                                     std::uint32_t j, const TriIndices& ti,
+                                                     const TriIndices& tj) {
+  return !sameMesh(split, i, j) || !shareIndex(ti, tj);
 }
 
 /// The self query's emit rule: a pair of one mesh that shares a vertex is adjacent, not a
@@ -768,16 +771,8 @@ __device__ __forceinline__ bool sameMesh(std::uint32_t split, std::uint32_t i, s
 template <class S>
 __device__ __forceinline__ bool selfCandidate(const HashView<S>& M, std::uint32_t split,
                                               std::uint32_t i, std::uint32_t j, bool by_index) {
-  if (!sameMesh(split, i, j)) return true;
-  if (by_index) return !shareIndex(loadTri(M.t, i), loadTri(M.t, j));
-  return !adjacentTriangles(M, i, j);
-}
-
-/// selfCandidate by index, with both triangles' indices at hand.
-__device__ __forceinline__ bool selfCandidateByIndex(std::uint32_t split, std::uint32_t i,
-                                                     std::uint32_t j, const TriIndices& ti,
-                                                     const TriIndices& tj) {
-  return !sameMesh(split, i, j) || !shareIndex(ti, tj);
+  if (by_index) return selfCandidateByIndex(split, i, j, loadTri(M.t, i), loadTri(M.t, j));
+  return !sameMesh(split, i, j) || !adjacentTriangles(M, i, j);
 }
 
 /// The query box of B's triangle j in A's frame: its own box when the frames coincide, else the
