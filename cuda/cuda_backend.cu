@@ -680,6 +680,61 @@ __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, s
     *out.big = 1;  // the segment's pair seg_max + 1: the radix sort orders this query
 }
 
+/// A warp's staging area for the pairs it emits (stagePair): 64 keys in shared memory and their
+/// count, `fill` (warp-uniform, below 32 between calls). The warp writes its pairs there and
+/// moves them to the sink 32 at a time, with one atomic on the sink's counter per 32 pairs, where
+/// emitPair takes one per call of a group of lanes. The wait for that atomic's old value, which
+/// the lanes need before they can write, is what the candidate kernels' warps stalled on most
+/// (benchmarks/RESULTS-gpu.md: the cells' pairs, ncu's source counters).
+struct PairStage {
+  unsigned long long* keys;  ///< 64 slots of this warp's shared memory
+  unsigned int fill;
+};
+
+/// Moves the first n (1..32) staged keys to the sink (counted always, written below capacity).
+/// Every lane of the warp must call.
+__device__ __forceinline__ void moveStaged(const PairSink& out, const PairStage& st,
+                                           unsigned int n) {
+  const unsigned int lane = threadIdx.x & 31u;
+  unsigned long long base = 0;
+  if (lane == 0) base = atomicAdd(out.count, static_cast<unsigned long long>(n));
+  base = __shfl_sync(0xFFFFFFFFu, base, 0);
+  if (lane < n && base + lane < out.capacity) out.pairs[base + lane] = st.keys[lane];
+}
+
+/// Emits (a, b) from each lane whose `hit` is set, as emitPair does, through the warp's stage.
+/// Every lane of the warp must call (the same call), with warp-uniform st.
+__device__ __forceinline__ void stagePair(const PairSink& out, PairStage& st, bool hit,
+                                          std::uint32_t a, std::uint32_t b) {
+  const unsigned int lane = threadIdx.x & 31u;
+  const unsigned int m = __ballot_sync(0xFFFFFFFFu, hit);
+  if (m == 0) return;
+  if (hit) {
+    st.keys[st.fill + __popc(m & ((1u << lane) - 1u))] =
+        (static_cast<unsigned long long>(a) << out.b_bits) | b;
+    if (out.seg != nullptr && atomicAdd(out.seg + (a >> out.seg_shift), 1u) == out.seg_max)
+      *out.big = 1;
+  }
+  st.fill += __popc(m);
+  if (st.fill < 32) return;
+  __syncwarp();
+  moveStaged(out, st, 32);
+  __syncwarp();
+  const unsigned long long rest = st.keys[32 + lane];
+  __syncwarp();
+  st.keys[lane] = rest;  // (slots past the new fill hold garbage, never read)
+  st.fill -= 32;
+  __syncwarp();
+}
+
+/// Moves what is left in the warp's stage to the sink. Every lane of the warp must call.
+__device__ __forceinline__ void flushStage(const PairSink& out, PairStage& st) {
+  __syncwarp();
+  if (st.fill > 0) moveStaged(out, st, st.fill);
+  __syncwarp();
+  st.fill = 0;
+}
+
 /// One round of a query pass: phase 1, filter and exact tests of one contiguous range of the
 /// candidate search's tasks (runQuery: a query whose candidates would not fit in the candidate
 /// buffer's limit runs in several rounds, each reusing the buffer; the pairs add up across
@@ -902,10 +957,12 @@ template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
                              std::uint32_t max_visit, int level_skip, bool size_by_level,
-                             bool by_index, std::uint32_t split, Round round, PairSink cand,
-                             unsigned long long* tasks) {
+                             bool by_index, bool fixed_cells, bool staged, std::uint32_t split,
+                             Round round, PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
+  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (staged)
   WarpQuery* q = slots + (threadIdx.x & ~31u);
+  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
   const std::uint32_t per_warp = 32u >> log_p;
   const unsigned long long count = (n + per_warp - 1) / per_warp;
@@ -927,16 +984,22 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       mine.live = detail::isEmpty(mine.box) ? 0u : 1u;
     }
     scanCandidatesWarp<kSpans>(
-        M, cInfo(0), q, mine, log_p, max_visit, by_index,
+        M, cInfo(0), q, mine, log_p, max_visit, by_index, fixed_cells,
         [&](const WarpQuery& o, std::uint32_t j, double dj) {
           return dj > o.d || (dj == o.d && j > o.id);
         },
-        [&](const WarpQuery& o, std::uint32_t j, const TriIndices& tj) {
-          if (by_index ? selfCandidateByIndex(split, o.id, j, o.tri, tj)
-                       : selfCandidate(M, split, o.id, j, false))
-            emitPair(cand, o.id, j);
+        [&](const WarpQuery& o, std::uint32_t j, const TriIndices& tj, std::uint32_t& a,
+            std::uint32_t& b) {
+          a = o.id, b = j;
+          return by_index ? selfCandidateByIndex(split, o.id, j, o.tri, tj)
+                          : selfCandidate(M, split, o.id, j, false);
+        },
+        [&](bool hit, std::uint32_t a, std::uint32_t b) {
+          if (staged) stagePair(cand, stage, hit, a, b);
+          else if (hit) emitPair(cand, a, b);
         });
   });
+  if (staged) flushStage(cand, stage);
 }
 
 /// A triangle's box, its coordinates loaded at once for float (loadBox), plainly for double.
@@ -975,13 +1038,15 @@ template <class S, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, 8)
     selfCellPairsKernel(HashView<S> M, const std::uint32_t* __restrict__ block_cell,
                         std::uint32_t cell_cap, std::uint32_t rows, std::uint32_t max_visit,
-                        bool by_index, std::uint32_t split, Round round, PairSink cand,
-                        unsigned long long* tasks) {
+                        bool by_index, bool staged, std::uint32_t split, Round round,
+                        PairSink cand, unsigned long long* tasks) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
   __shared__ TriIndices row_tris[kQueryBlock / 32][32];  // (by_index)
+  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (staged)
   Aabb<S>* const row_box = row_boxes[threadIdx.x >> 5];
   TriIndices* const row_tri = row_tris[threadIdx.x >> 5];
+  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const unsigned int lane = threadIdx.x & 31u;
   const BuildInfo& info = cInfo(0);
   const std::uint32_t cells = info.need_sync ? 0u : (info.cells < cell_cap ? info.cells : cell_cap);
@@ -1030,31 +1095,40 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
         const std::uint32_t o_end = __shfl_sync(kFull, end, owner);
         const std::uint32_t o_v = __shfl_sync(kFull, v, owner);
         const std::uint32_t o_span = kSpans ? __shfl_sync(kFull, span, owner) : 0u;
-        if (t >= total) continue;
-        // The partner at position q of row a's cyclic list.
-        const std::uint32_t m = o_end - o_begin, a = first + owner - o_begin;
-        const std::uint32_t q = o_next + (t - o_first);
-        std::uint32_t bpos = q < (m - 1) / 2 ? a + 1 + q : a + m / 2;
-        if (bpos >= m) bpos -= m;
-        const std::uint32_t b = o_begin + bpos;
-        const std::uint32_t w = __ldg(M.entry_tri + b);
-        // This cell is the pair's canonical cell, and (kSpans) their spans overlap in it.
-        if (((o_v | w) >> 29) != 7u) continue;
-        if (kSpans && !detail::subcellSpansOverlap(o_span, __ldg(M.entry_span + b))) continue;
-        const std::uint32_t i = o_v & kEntryTriMask, j = w & kEntryTriMask;
-        const Aabb<S> e = loadBoxOf(M.box + j);
-        // (by_index: the partner's vertex indices come in the same round trip as its box.)
-        const TriIndices tj = by_index ? loadTri(M.t, j) : TriIndices{0, 0, 0};
-        bool overlap;
-        if constexpr (std::is_same<S, float>::value) overlap = boxesInFloat(row_box[owner], e);
-        else overlap = detail::boxesOverlap(row_box[owner], e);
-        if (overlap && (by_index ? selfCandidateByIndex(split, i, j, row_tri[owner], tj)
-                                 : selfCandidate(M, split, i, j, false)))
-          emitPair(cand, i < j ? i : j, i < j ? j : i);
+        bool hit = false;
+        std::uint32_t i = 0, j = 0;
+        do {  // (once: `break` skips to the emission, where the warp meets again)
+          if (t >= total) break;
+          // The partner at position q of row a's cyclic list.
+          const std::uint32_t m = o_end - o_begin, a = first + owner - o_begin;
+          const std::uint32_t q = o_next + (t - o_first);
+          std::uint32_t bpos = q < (m - 1) / 2 ? a + 1 + q : a + m / 2;
+          if (bpos >= m) bpos -= m;
+          const std::uint32_t b = o_begin + bpos;
+          const std::uint32_t w = __ldg(M.entry_tri + b);
+          const std::uint32_t w_span = kSpans ? __ldg(M.entry_span + b) : 0u;
+          // This cell is the pair's canonical cell, and (kSpans) their spans overlap in it (no
+          // short circuit: both loads issue together).
+          if ((((o_v | w) >> 29) != 7u) | (kSpans && !detail::subcellSpansOverlap(o_span, w_span)))
+            break;
+          i = o_v & kEntryTriMask, j = w & kEntryTriMask;
+          const Aabb<S> e = loadBoxOf(M.box + j);
+          // (by_index: the partner's vertex indices come in the same round trip as its box.)
+          const TriIndices tj = by_index ? loadTri(M.t, j) : TriIndices{0, 0, 0};
+          bool overlap;
+          if constexpr (std::is_same<S, float>::value) overlap = boxesInFloat(row_box[owner], e);
+          else overlap = detail::boxesOverlap(row_box[owner], e);
+          hit = overlap && (by_index ? selfCandidateByIndex(split, i, j, row_tri[owner], tj)
+                                     : selfCandidate(M, split, i, j, false));
+        } while (false);
+        const std::uint32_t lo = i < j ? i : j, hi = i < j ? j : i;
+        if (staged) stagePair(cand, stage, hit, lo, hi);
+        else if (hit) emitPair(cand, lo, hi);
       }
       next += cnt;
     }
   }
+  if (staged) flushStage(cand, stage);
 }
 
 /// Phase 1 of an inter-object query with the warp-wide scan: the same candidates as
@@ -1067,9 +1141,12 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                               std::uint32_t na, std::uint32_t nb, bool identity,
                               Transform<double> b_to_a, double eps_coef, double eps_tmag,
                               unsigned int log_p, std::uint32_t max_visit, bool size_by_level,
-                              Round round, PairSink cand, unsigned long long* tasks) {
+                              bool fixed_cells, bool staged, Round round, PairSink cand,
+                              unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
+  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (staged)
   WarpQuery* q = slots + (threadIdx.x & ~31u);
+  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
   const std::uint32_t per_warp = 32u >> log_p;
   const unsigned long long wa = (na + per_warp - 1) / per_warp;
@@ -1104,17 +1181,32 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       if (size_by_level) mine.size_level = static_cast<std::int16_t>(own);
       mine.live = (none || detail::isEmpty(mine.box)) ? 0u : 1u;
     }
+    const auto emit = [&](bool hit, std::uint32_t a, std::uint32_t b) {
+      if (staged) stagePair(cand, stage, hit, a, b);
+      else if (hit) emitPair(cand, a, b);
+    };
     if (a_side)
       scanCandidatesWarp<kSpans>(
-          B, target, q, mine, log_p, max_visit, false,
+          B, target, q, mine, log_p, max_visit, false, fixed_cells,
           [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
-          [&](const WarpQuery& o, std::uint32_t j, const TriIndices&) { emitPair(cand, o.id, j); });
+          [](const WarpQuery& o, std::uint32_t j, const TriIndices&, std::uint32_t& a,
+             std::uint32_t& b) {
+            a = o.id, b = j;
+            return true;
+          },
+          emit);
     else
       scanCandidatesWarp<kSpans>(
-          A, target, q, mine, log_p, max_visit, false,
+          A, target, q, mine, log_p, max_visit, false, fixed_cells,
           [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
-          [&](const WarpQuery& o, std::uint32_t i, const TriIndices&) { emitPair(cand, i, o.id); });
+          [](const WarpQuery& o, std::uint32_t i, const TriIndices&, std::uint32_t& a,
+             std::uint32_t& b) {
+            a = i, b = o.id;
+            return true;
+          },
+          emit);
   });
+  if (staged) flushStage(cand, stage);
 }
 
 /// Phase 2: the exact test of each candidate (grid-stride over the device-side count, so the
@@ -2640,6 +2732,19 @@ bool dynamicWarpTasks() { return detail::switchKnob("KDET_FCL_CUDA_WARP_TASKS", 
 /// benchmarks can compare the two; both give the same candidates.
 bool sizeByLevel() { return detail::switchKnob("KDET_FCL_CUDA_SIZE_BY_LEVEL", true); }
 
+/// Whether the warp-wide scan takes each level's cell range from the query's fixed-point
+/// coordinates (fixedCells in device_hash.cuh; hashes of coordinates up to kFixedCoordBits bits):
+/// KDET_FCL_CUDA_FIXED_CELLS unset or 1; 0 computes every level's range from the box in double.
+/// Read at every query, so tests and benchmarks can compare the two; both give the same ranges.
+bool fixedCellsKnob() { return detail::switchKnob("KDET_FCL_CUDA_FIXED_CELLS", true); }
+
+/// Whether the warp-wide candidate kernels (the warp scans and the cells' pairs) emit their
+/// candidates through a warp's stage in shared memory, 32 at a time (stagePair), or each group
+/// of lanes with its own atomic (emitPair): KDET_FCL_CUDA_STAGE_PAIRS unset or 1, or 0. Read at
+/// every query, so tests and benchmarks can compare the two; both give the same candidates (in
+/// another order).
+bool stagedPairs() { return detail::switchKnob("KDET_FCL_CUDA_STAGE_PAIRS", true); }
+
 /// Whether a self query's phase 1 applies the adjacency rule by vertex index only
 /// (selfCandidate's by_index: the entry's indices come with its box, and the pairs that share a
 /// vertex by coordinates alone are dropped by the exact kernel), for a mesh (or two hashed as
@@ -2863,9 +2968,14 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const bool spans = spansFor(std::max(A.inter_density, B.inter_density));
   const bool warp = warpScan();
   const bool size_by_level = warp && sizeByLevel();
+  const bool fixed_cells = warp && fixedCellsKnob();
+  const bool staged = stagedPairs();
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
+  ctx.profile.fixed_cells = fixed_cells && A.info.coord_bits <= kFixedCoordBits &&
+                            B.info.coord_bits <= kFixedCoordBits;
+  ctx.profile.staged_pairs = staged && warp;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
@@ -2883,7 +2993,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
       const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
       kernel<<<wl.blocks, kQueryBlock, 0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a,
                                                eps_coef, eps_tmag, log_p, warpVisit(),
-                                               size_by_level, round, cand, wl.tasks);
+                                               size_by_level, fixed_cells, staged, round, cand,
+                                               wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -2938,10 +3049,14 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   const bool cell_pairs = selfCellPairs(M.info.entries);
   const int level_skip = cell_pairs ? 1 : 0;
   const bool size_by_level = warp && sizeByLevel();
+  const bool fixed_cells = warp && fixedCellsKnob();
+  const bool staged = stagedPairs();
   const bool by_index = indexAdjacency(M.nv, n);
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
+  ctx.profile.fixed_cells = fixed_cells && M.info.coord_bits <= kFixedCoordBits;
+  ctx.profile.staged_pairs = staged && (cell_pairs || warp);
   ctx.profile.index_adjacency = by_index;
   ctx.profile.self_cell_pairs = cell_pairs;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
@@ -2956,7 +3071,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
           kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
       kernel<<<blocks, kQueryBlock, 0, s>>>(mv, M.block_cell.data(),
                                             M.pending ? M.pending_cell_cap : M.cell_cap, rows,
-                                            warpVisit(), by_index, split, round, cand,
+                                            warpVisit(), by_index, staged, split, round, cand,
                                             ctx.cellTasks());
       checkLaunch();
       // The round's candidates so far are the cells' (cell_candidates; the stages' rounds).
@@ -2972,8 +3087,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
         const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
         const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
         kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip,
-                                                 size_by_level, by_index, split, round, cand,
-                                                 wl.tasks);
+                                                 size_by_level, by_index, fixed_cells, staged,
+                                                 split, round, cand, wl.tasks);
       } else {
         withTile([&](auto g, auto mb) {
           constexpr int G = decltype(g)::value;
@@ -3121,6 +3236,8 @@ void readEveryKnob() {
   (void)warpVisit();
   (void)dynamicWarpTasks();
   (void)sizeByLevel();
+  (void)fixedCellsKnob();
+  (void)stagedPairs();
   (void)indexAdjacency(0, 0);
   (void)selfCellPairs(0);
   (void)cellRows(0, 0);

@@ -181,6 +181,13 @@ struct QueryProfile {
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)
   bool size_by_level = false;  ///< the warp-wide scan passed the entries above each query's own
                               ///< level by the size rule unloaded (KDET_FCL_CUDA_SIZE_BY_LEVEL)
+  bool fixed_cells = false;  ///< the warp-wide scan took its cell ranges from fixed-point
+                             ///< coordinates (KDET_FCL_CUDA_FIXED_CELLS; hashes whose level-0
+                             ///< cell coordinates fit in 28 bits, as of their last build read
+                             ///< back; the device decides on its own copy of the build info)
+  bool staged_pairs = false;  ///< the warp-wide candidate kernels (warp scan, cells' pairs)
+                              ///< emitted their candidates through a warp's stage in shared
+                              ///< memory (KDET_FCL_CUDA_STAGE_PAIRS)
   bool index_adjacency = false;  ///< a self query's phase 1 dropped the pairs sharing a vertex by
                                  ///< index only; those sharing one by coordinates alone were
                                  ///< candidates, dropped by the exact kernel

@@ -264,7 +264,8 @@ __device__ __forceinline__ unsigned int cellEnds(int dx, int dy, int dz, int n0,
 template <bool kSpans>
 __device__ __forceinline__ bool entrySeenHere(std::uint32_t v, unsigned int ends,
                                               std::uint32_t espan, std::uint32_t qspan) {
-  return (((v >> 29) | ends | 0x38u) & 0x3Fu) == 0x3Fu &&
+  // (No short circuit: the span's load issues with the entry's, not after its test.)
+  return ((((v >> 29) | ends | 0x38u) & 0x3Fu) == 0x3Fu) &
          (!kSpans || detail::subcellSpansOverlap(espan, qspan));
 }
 
@@ -379,7 +380,45 @@ struct WarpQuery {
   /// strictly larger than the query, levelFor being monotone). kMaxLevels: every entry's
   /// diameter is loaded and tested (KDET_FCL_CUDA_SIZE_BY_LEVEL=0).
   std::int16_t size_level;
+  /// The box's fixed-point coordinates (fixedCoord; lo x, y, z, then hi x, y, z), from which
+  /// the scan takes every level's cell range and sub-cell corners with shifts (startLevel). Set
+  /// by scanCandidatesWarp when it runs fixed (fixedCells).
+  std::uint32_t fine[6];
 };
+
+/// The most bits of a hash's level-0 cell coordinates (BuildInfo::coord_bits) for which the
+/// warp-wide scan takes its cell ranges from fixed-point coordinates (fixedCoord): below that,
+/// every fixed-point coordinate of a box inside the hash's bounds fits in 32 bits.
+constexpr int kFixedCoordBits = 32 - detail::kSubcellBits;
+
+/// Whether the warp-wide scan of a hash with this build info takes its cell ranges from
+/// fixed-point coordinates: asked for (KDET_FCL_CUDA_FIXED_CELLS, `fixed`) and the hash's
+/// coordinates small enough (kFixedCoordBits). Else each level's range is computed from the
+/// box in double (detail::cellRange), as the other scans do. Both give the same ranges.
+__device__ __forceinline__ bool fixedCells(bool fixed, const BuildInfo& info) {
+  return fixed && info.coord_bits <= kFixedCoordBits;
+}
+
+/// The fixed-point coordinate of x along `axis`: its cell coordinate on the grid of level-0
+/// sub-cells (detail::cellCoordScaled at scale 2^kSubcellBits). For x inside the bounds of a
+/// hash whose level-0 coordinates have coord_bits <= kFixedCoordBits bits (fixedCells), it is
+/// floor(2^kSubcellBits w) for w = (x - origin) * inv_cell0 rounded once (0 for w <= 0), below
+/// 2^32: w is at most w of the bounds' max corner (rounding is monotone), whose floor is below
+/// 2^coord_bits, so no clamp of cellCoordScaled binds. Since the scaling by a power of two is
+/// exact and floor(floor(y) / 2^k) = floor(y / 2^k), on every level L the coordinate shifted
+/// right by L + kSubcellBits is detail::cellCoord(x, L), and shifted right by L it is the
+/// sub-cell coordinate from which subcellSpanCorners takes its 4 bits (the low 4 bits, which
+/// need no clamp): fixedRange.
+__device__ __forceinline__ std::uint32_t fixedCoord(double x, int axis,
+                                                    const detail::GridParams& g) {
+  return static_cast<std::uint32_t>(
+      detail::cellCoordScaled(x, axis, double(1 << detail::kSubcellBits), g));
+}
+
+/// u >> s for any s >= 0 (0 from s = 32 on).
+__device__ __forceinline__ std::uint32_t shiftRight(std::uint32_t u, int s) {
+  return s < 32 ? u >> s : 0u;
+}
 
 /// Bit of a visit's `ends` (cellEnds' six bits below it) in the warp-wide scan: the visited cell
 /// lies on a level above the query's size_level, so its entries pass the size rule unloaded.
@@ -414,14 +453,14 @@ __device__ __forceinline__ bool boxesInFloat(const detail::Aabb<float>& p,
 }
 
 /// A lane's position in its query's lookups: level L (past top_level: done), the level's cell
-/// range as a first cell and extents, the next cell's offsets, and what is left of a cell that
-/// was cut into chunks (max_visit).
+/// range as a first cell and extents, the lane's next position in the level's walk (the cells in
+/// x-major order: position p is offset (p / (ny nz), p / nz mod ny, p mod nz) for ny = n[1] + 1,
+/// nz = n[2] + 1), and what is left of a cell that was cut into chunks (max_visit).
 struct LookupCursor {
   std::int64_t lo[3];
   int n[3];
-  int dx, dy, dz;
   int L;
-  std::uint32_t pos;      ///< cells passed so far (the lane probes those of its residue)
+  std::uint32_t p;        ///< the lane's next position in the level's walk
   std::uint32_t corners;  ///< sub-cell span corners of the level (kSpans only)
   std::uint32_t rest_begin, rest_end, rest_ends;
 };
@@ -431,35 +470,66 @@ struct LookupCursor {
 /// smaller bound only for tests: KDET_FCL_CUDA_WARP_VISIT.)
 constexpr std::uint32_t kMaxWarpVisit = 1u << 25;
 
-/// Moves the cursor to the first level >= L0 of `levels` (past top_level if none).
+/// The cells of the cursor's level range.
+__device__ __forceinline__ std::uint32_t rangeCells(const LookupCursor& c) {
+  return static_cast<std::uint32_t>(c.n[0] + 1) * static_cast<std::uint32_t>(c.n[1] + 1) *
+         static_cast<std::uint32_t>(c.n[2] + 1);
+}
+
+/// The cursor's level range and sub-cell corners on level L, from the query's fixed-point
+/// coordinates (`fixed`, see fixedCoord: a shift per coordinate) or from its box in double
+/// (detail::cellRange and subcellSpanCorners). The same numbers either way.
 template <bool kSpans>
-__device__ __forceinline__ void startLevel(LookupCursor& c, const detail::Aabb<double>& box,
-                                           const BuildInfo& info, unsigned long long levels,
-                                           int L0) {
-  const unsigned long long left = levelsFrom(levels, L0);
-  if (left != 0) {
-    const int L = __ffsll(static_cast<long long>(left)) - 1;
-    const detail::CellRange r = detail::cellRange(box, L, info.grid);
+__device__ __forceinline__ void levelRange(LookupCursor& c, const WarpQuery& q,
+                                           const BuildInfo& info, bool fixed, int L) {
+  if (fixed) {
+    const int s = L + detail::kSubcellBits;
+    std::uint32_t corners = 0;
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t lo = shiftRight(q.fine[a], s), hi = shiftRight(q.fine[3 + a], s);
+      c.lo[a] = lo;
+      c.n[a] = static_cast<int>(hi - lo);
+      if (kSpans)
+        corners |= ((shiftRight(q.fine[a], L) & 15u) << (5 * a)) |
+                   ((shiftRight(q.fine[3 + a], L) & 15u) << (15 + 5 * a));
+    }
+    c.corners = kSpans ? corners : detail::kWholeCellSpan;
+  } else {
+    const detail::CellRange r = detail::cellRange(q.box, L, info.grid);
     for (int a = 0; a < 3; ++a) {
       c.lo[a] = r.lo[a];
       c.n[a] = static_cast<int>(r.hi[a] - r.lo[a]);
     }
-    c.corners = kSpans ? detail::subcellSpanCorners(box, L, r, info.grid) : detail::kWholeCellSpan;
-    c.dx = c.dy = c.dz = 0;
-    c.L = L;
-    return;
+    c.corners =
+        kSpans ? detail::subcellSpanCorners(q.box, L, r, info.grid) : detail::kWholeCellSpan;
+  }
+  c.L = L;
+}
+
+/// Moves the cursor to the first level >= L0 of the query's levels whose walk reaches the lane's
+/// position c.p (the positions of the levels passed on the way are taken off it, so each lane
+/// keeps its share of the query's whole walk); past top_level if none.
+template <bool kSpans>
+__device__ __forceinline__ void startLevel(LookupCursor& c, const WarpQuery& q,
+                                           const BuildInfo& info, bool fixed, int L0) {
+  for (unsigned long long left = levelsFrom(q.levels, L0); left != 0; left &= left - 1) {
+    levelRange<kSpans>(c, q, info, fixed, __ffsll(static_cast<long long>(left)) - 1);
+    const std::uint32_t cells = rangeCells(c);
+    if (c.p < cells) return;
+    c.p -= cells;
   }
   c.L = info.top_level + 1;
 }
 
 /// The lane's next visit: the entries [begin, begin + count) of the next occupied cell of its
-/// share of the lookups (the cells whose position in the query's walk is `sub` modulo P, a
-/// power of two), or the next chunk of a cut cell, with the cell's `ends` bits (as in
-/// scanCandidatesGroup) and the query's sub-cell span there; count 0 when the lookups are done.
+/// share of the lookups (the cells whose position in the query's walk over all its levels is
+/// `sub` modulo P, a power of two: the lane steps P positions at a time), or the next chunk of a
+/// cut cell, with the cell's `ends` bits (as in scanCandidatesGroup) and the query's sub-cell
+/// span there; count 0 when the lookups are done.
 template <bool kSpans, class S>
 __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const BuildInfo& info,
-                                                   const WarpQuery& mine, std::uint32_t max_visit,
-                                                   unsigned int P, unsigned int sub,
+                                                   const WarpQuery& mine, bool fixed,
+                                                   std::uint32_t max_visit, unsigned int P,
                                                    LookupCursor& c, std::uint32_t& begin,
                                                    unsigned int& ends, std::uint32_t& qspan) {
   std::uint32_t end = 0;
@@ -470,20 +540,21 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
   } else {
     int cell = -1;
     while (cell < 0 && c.L <= info.top_level) {
-      if ((c.pos++ & (P - 1)) == sub) {
-        cell = findCell(h, info, c.L, c.lo[0] + c.dx, c.lo[1] + c.dy, c.lo[2] + c.dz);
-        if (cell >= 0) {
-          ends = cellEnds(c.dx, c.dy, c.dz, c.n[0], c.n[1], c.n[2]);
-          if (kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
-          if (c.L > mine.size_level) ends |= kAboveQueryLevel;
-        }
+      // The lane's position p in the level's walk (p < its cells: startLevel).
+      const std::uint32_t nz = static_cast<std::uint32_t>(c.n[2] + 1);
+      const std::uint32_t nyz = static_cast<std::uint32_t>(c.n[1] + 1) * nz;
+      const std::uint32_t dx = c.p / nyz, r = c.p - dx * nyz, dy = r / nz, dz = r - dy * nz;
+      cell = findCell(h, info, c.L, c.lo[0] + dx, c.lo[1] + dy, c.lo[2] + dz);
+      if (cell >= 0) {
+        ends = cellEnds(static_cast<int>(dx), static_cast<int>(dy), static_cast<int>(dz),
+                        c.n[0], c.n[1], c.n[2]);
+        if (kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
+        if (c.L > mine.size_level) ends |= kAboveQueryLevel;
       }
-      if (++c.dz > c.n[2]) {
-        c.dz = 0;
-        if (++c.dy > c.n[1]) {
-          c.dy = 0;
-          if (++c.dx > c.n[0]) startLevel<kSpans>(c, mine.box, info, mine.levels, c.L + 1);
-        }
+      c.p += P;
+      if (c.p >= rangeCells(c)) {
+        c.p -= rangeCells(c);
+        startLevel<kSpans>(c, mine, info, fixed, c.L + 1);
       }
     }
     if (cell < 0) return 0;
@@ -527,39 +598,53 @@ __device__ __forceinline__ int warpOwnerOf(std::uint32_t incl, std::uint32_t t) 
 /// round, whatever cell and query each belongs to. So no lane idles at the end of a cell, at the
 /// price of the size rule's early exit: an entry smaller than its query is rejected by accept()
 /// after its diameter is loaded instead of ending the cell. A larger P gives a small query set more
-/// warps. emit(query, j, tj) gets entry j's vertex indices tj when `load_tri` (loaded beside its
-/// box, for a self query's adjacency rule), else zeros.
-/// accept(q_owner, j, d_j) and emit(q_owner, j) get the slot of the query that the entry is tested
-/// against. max_visit: 1..kMaxWarpVisit. The query's levels (query.levels) as scanCandidatesGroup's.
-/// Every lane of the warp must call, with warp-uniform arguments except `query`.
-template <bool kSpans, class S, class Accept, class Emit>
+/// warps. candidate(query, j, tj, a, b) decides on an entry j that passed the size rule and the
+/// box test (the pair's last rules: a self query's adjacency) and names the pair (a, b); tj is
+/// entry j's vertex indices when `load_tri` (loaded beside its box, for a self query's adjacency
+/// rule), else zeros. emit(hit, a, b) is then called by every lane of the warp together, once per
+/// round of 32 entries (hit: candidate() accepted the lane's entry), so that the caller can
+/// collect the round's pairs with warp-wide operations.
+/// accept(q_owner, j, d_j) and candidate(q_owner, ...) get the slot of the query that the entry
+/// is tested against. max_visit: 1..kMaxWarpVisit. The query's levels (query.levels) as scanCandidatesGroup's.
+/// `fixed_cells`: take each level's cell range from the query's fixed-point coordinates where the
+/// hash allows (fixedCells; a few shifts against a dozen rounded double operations and their
+/// clamps per level). Every lane of the warp must call, with warp-uniform arguments except
+/// `query`.
+template <bool kSpans, class S, class Accept, class Candidate, class Emit>
 __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
                                                    WarpQuery* q,
                                                    const WarpQuery& query, unsigned int log_p,
                                                    std::uint32_t max_visit, bool load_tri,
-                                                   Accept&& accept, Emit&& emit) {
+                                                   bool fixed_cells, Accept&& accept,
+                                                   Candidate&& candidate, Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
   const unsigned int P = 1u << log_p;
   const unsigned int sub = lane & (P - 1);
+  const bool fixed = fixedCells(fixed_cells, info);
   __syncwarp();  // the lanes are done with the slots' previous queries
   if (sub == 0) {
     WarpQuery w = query;
     w.test = std::is_same<S, float>::value ? testBoxOf(query.box) : detail::Aabb<float>{};
+    if (fixed)
+      for (int a = 0; a < 3; ++a) {
+        w.fine[a] = fixedCoord(query.box.lo[a], a, info.grid);
+        w.fine[3 + a] = fixedCoord(query.box.hi[a], a, info.grid);
+      }
     q[lane >> log_p] = w;
   }
   __syncwarp();
   const WarpQuery& mine = q[lane >> log_p];
   LookupCursor c;
   c.rest_begin = c.rest_end = c.rest_ends = 0;
-  c.pos = 0;
+  c.p = sub;  // the lane's first position in the query's walk
   c.L = info.top_level + 1;
-  if (mine.live) startLevel<kSpans>(c, mine.box, info, mine.levels, 0);
+  if (mine.live) startLevel<kSpans>(c, mine, info, fixed, 0);
   while (true) {
     std::uint32_t begin = 0, qspan = detail::kWholeCellSpan;
     unsigned int ends = 0;
     const std::uint32_t count =
-        nextVisit<kSpans>(h, info, mine, max_visit, P, sub, c, begin, ends, qspan);
+        nextVisit<kSpans>(h, info, mine, fixed, max_visit, P, c, begin, ends, qspan);
     // Lane o owns the warp's entries [incl_o - count_o, incl_o).
     const std::uint32_t incl = warpInclusiveSum(count);
     const std::uint32_t total = __shfl_sync(kFull, incl, 31);
@@ -572,6 +657,8 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
       const std::uint32_t o_begin = __shfl_sync(kFull, begin, owner);
       const unsigned int o_ends = __shfl_sync(kFull, ends, owner);
       const std::uint32_t o_qspan = kSpans ? __shfl_sync(kFull, qspan, owner) : 0u;
+      bool hit = false;
+      std::uint32_t pa = 0, pb = 0;
       if (t < total) {
         const std::uint32_t k = o_begin + (t - o_first);
         const std::uint32_t v = __ldg(h.entry_tri + k);
@@ -589,13 +676,15 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
             // one round trip per entry (with the short circuit, each coordinate's load waited
             // for the previous comparison: H100, benchmarks/RESULTS-gpu.md).
             const detail::Aabb<float> e = loadBox(h.box + j);
-            if ((above || accept(oq, j, dj)) & boxesInFloat(oq.test, e)) emit(oq, j, tj);
+            if ((above || accept(oq, j, dj)) & boxesInFloat(oq.test, e))
+              hit = candidate(oq, j, tj, pa, pb);
           } else {
             if ((above || accept(oq, j, dj)) && detail::boxesOverlap(oq.box, boxOf(h, j)))
-              emit(oq, j, tj);
+              hit = candidate(oq, j, tj, pa, pb);
           }
         }
       }
+      emit(hit, pa, pb);
     }
   }
 }

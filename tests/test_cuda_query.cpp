@@ -405,6 +405,8 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
       {"KDET_FCL_CUDA_SIZE_BY_LEVEL", on_off, not_on_off},
+      {"KDET_FCL_CUDA_FIXED_CELLS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_STAGE_PAIRS", on_off, not_on_off},
       {"KDET_FCL_CUDA_INDEX_ADJACENCY", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_CELLS", on_off, not_on_off},
       {"KDET_FCL_CUDA_JOINT", on_off, not_on_off},
@@ -974,7 +976,9 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   // from the cells or scanning every level from the query's own (KDET_FCL_CUDA_SELF_CELLS=1 or 0;
   // unset, these meshes are far below the size from which the cells are used by default), and
   // with the warp scan passing the entries above each query's own level by the size rule without
-  // their diameters or loading and testing every one (KDET_FCL_CUDA_SIZE_BY_LEVEL=1 or 0).
+  // their diameters or loading and testing every one (KDET_FCL_CUDA_SIZE_BY_LEVEL=1 or 0), and
+  // taking its cell ranges from fixed-point coordinates or from the boxes in double
+  // (KDET_FCL_CUDA_FIXED_CELLS=1 or 0).
   // Scenes: a stack of 60 crossing sheets (cells of hundreds of entries, more than one warp round
   // per cell), a random soup of many sizes (many levels), a mesh of fewer than 32 triangles (one
   // partial warp), a triangle count that is no multiple of 32, and inter queries under a pose
@@ -1042,6 +1046,7 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
     bool rebuild;       // re-hash every mesh under this mode first (cuda::markDeformed)
     const char* cells = nullptr;  // KDET_FCL_CUDA_SELF_CELLS
     const char* by_level = nullptr;  // KDET_FCL_CUDA_SIZE_BY_LEVEL
+    const char* fixed = nullptr;     // KDET_FCL_CUDA_FIXED_CELLS
   };
   // The cells list their triangles by size only when a mesh was last built under the tile scan
   // (whose early exit needs that order); the tile scan must also be right on cells built for the
@@ -1050,21 +1055,23 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
   cuda::setProfiling(true);
   for (const Mode m :
        {Mode{"tile", "0", nullptr, nullptr, nullptr, true, "0"},
-        Mode{"warp", "0", "1", nullptr, nullptr, false, "1"},
+        Mode{"warp", "0", "1", nullptr, nullptr, false, "1", nullptr, "0"},
         Mode{"warp", "1", "2", nullptr, "0", true, "0", "0"},
         Mode{"tile", "1", nullptr, nullptr, nullptr, false, "1"},
-        Mode{"warp", "0", "4", "3", nullptr, false, "1", "0"},
-        Mode{"warp", "1", "8", "1", "0", false, "1", "1"},
-        Mode{"warp", "0", "32", "3", "1", false, "0", "0"},
+        Mode{"warp", "0", "4", "3", nullptr, false, "1", "0", "1"},
+        Mode{"warp", "1", "8", "1", "0", false, "1", "1", "0"},
+        Mode{"warp", "0", "32", "3", "1", false, "0", "0", "0"},
         Mode{"warp", "1", "1", "1", nullptr, true, "1"},
         Mode{"tile", "0", nullptr, nullptr, nullptr, true},
         Mode{nullptr, "0", nullptr, nullptr, "0", false}}) {
     kdet_test::ScopedEnv scan("KDET_FCL_CUDA_SCAN", m.scan), spans("KDET_FCL_CUDA_SPANS", m.spans),
         lanes("KDET_FCL_CUDA_WARP_LANES", m.lanes), visit("KDET_FCL_CUDA_WARP_VISIT", m.visit),
         tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks), cells("KDET_FCL_CUDA_SELF_CELLS", m.cells),
-        by_level("KDET_FCL_CUDA_SIZE_BY_LEVEL", m.by_level);
+        by_level("KDET_FCL_CUDA_SIZE_BY_LEVEL", m.by_level),
+        fixed("KDET_FCL_CUDA_FIXED_CELLS", m.fixed);
     const bool cell_pairs = m.cells != nullptr && *m.cells == '1';
     const bool size_by_level = m.by_level == nullptr || *m.by_level == '1';
+    const bool fixed_cells = m.fixed == nullptr || *m.fixed == '1';
     const bool warp = m.scan == nullptr || std::string(m.scan) == "warp";
     const bool dynamic = m.tasks == nullptr || *m.tasks != '0';
     if (m.rebuild) {
@@ -1075,8 +1082,8 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
                              ", lanes " + (m.lanes ? m.lanes : "-") + ", visit " +
                              (m.visit ? m.visit : "-") + ", tasks " + (m.tasks ? m.tasks : "-") +
                              ", self cells " + (m.cells ? m.cells : "-") + ", size by level " +
-                             (m.by_level ? m.by_level : "-") +
-                             (m.rebuild ? ", rebuilt" : "");
+                             (m.by_level ? m.by_level : "-") + ", fixed cells " +
+                             (m.fixed ? m.fixed : "-") + (m.rebuild ? ", rebuilt" : "");
     for (auto& q : queries) {
       const QueryResult gpu = q.run(on(Backend::Cuda));
       const cuda::QueryProfile p = cuda::lastQueryProfile();
@@ -1084,6 +1091,7 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
       EXPECT_EQ(p.warp_scan, warp) << mode;
       EXPECT_EQ(p.warp_tasks, warp && dynamic) << mode;
       EXPECT_EQ(p.size_by_level, warp && size_by_level) << mode;
+      EXPECT_EQ(p.fixed_cells, warp && fixed_cells) << mode;  // (coordinates of a few bits)
       EXPECT_EQ(p.cells_by_size, built_for_tile) << q.what << " (" << mode << ")";
       if (!warp) EXPECT_EQ(p.warp_lanes, 0) << mode;
       if (warp && m.lanes) EXPECT_EQ(p.warp_lanes, std::atoi(m.lanes)) << mode;
@@ -1113,8 +1121,12 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
   // device (compact keys, no read-back) and built with 128-bit cell keys (KDET_FCL_CUDA_FULL_KEYS
   // with KDET_FCL_CUDA_SYNC_REHASH: another build path), with the cells' partners cut into
   // visits of one entry (KDET_FCL_CUDA_WARP_VISIT=1) or not, with the sub-cell span filter on
-  // and off (KDET_FCL_CUDA_SPANS), and with 1 to 32 entries per warp task of the cells' pairs
-  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density and the size).
+  // and off (KDET_FCL_CUDA_SPANS), with 1 to 32 entries per warp task of the cells' pairs
+  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density and the size), with the
+  // candidates of the cells and of the scan emitted through each warp's stage in shared memory or
+  // one atomic per group of lanes (KDET_FCL_CUDA_STAGE_PAIRS), and with the first pass's buffers
+  // capped at 3 pairs (KDET_FCL_CUDA_PAIR_CAPACITY: the stages' candidates past the capacity are
+  // counted, not written, and the query reruns).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -1134,23 +1146,32 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
     if (sc.crossing) EXPECT_GT(cpu.size(), 0u) << sc.what;
     struct Config {
       const char *full, *visit, *spans, *rows;
+      const char* stage = nullptr;  // KDET_FCL_CUDA_STAGE_PAIRS
+      const char* cap = nullptr;    // KDET_FCL_CUDA_PAIR_CAPACITY
     };
-    for (const Config c : {Config{"0", "", "1", nullptr}, Config{"0", "1", "0", "1"},
-                           Config{"1", "", "0", "8"}, Config{"1", "1", "1", "32"},
-                           Config{"0", "", "0", "2"}}) {
+    for (const Config c :
+         {Config{"0", "", "1", nullptr}, Config{"0", "1", "0", "1", "0"},
+          Config{"1", "", "0", "8", "1", "3"}, Config{"1", "1", "1", "32", "0", "3"},
+          Config{"0", "", "0", "2", "1"}}) {
       kdet_test::ScopedEnv keys("KDET_FCL_CUDA_FULL_KEYS", c.full),
           sync("KDET_FCL_CUDA_SYNC_REHASH", c.full), cut("KDET_FCL_CUDA_WARP_VISIT", c.visit),
-          spans("KDET_FCL_CUDA_SPANS", c.spans), rows("KDET_FCL_CUDA_CELL_ROWS", c.rows);
+          spans("KDET_FCL_CUDA_SPANS", c.spans), rows("KDET_FCL_CUDA_CELL_ROWS", c.rows),
+          stage("KDET_FCL_CUDA_STAGE_PAIRS", c.stage), cap("KDET_FCL_CUDA_PAIR_CAPACITY", c.cap);
       cuda::markDeformed(sc.mesh);  // re-hash under these keys
       long long candidates = -1;
       for (const char* cells : {"1", "0"}) {
         kdet_test::ScopedEnv on_off("KDET_FCL_CUDA_SELF_CELLS", cells);
         const std::string what = std::string(sc.what) + ", full keys " + c.full + ", visit '" +
                                  c.visit + "', spans " + c.spans + ", rows " +
-                                 (c.rows ? c.rows : "-") + ", self cells " + cells;
+                                 (c.rows ? c.rows : "-") + ", stage " +
+                                 (c.stage ? c.stage : "-") + ", capacity " +
+                                 (c.cap ? c.cap : "-") + ", self cells " + cells;
         EXPECT_EQ(intersectSelf(sc.mesh, on(Backend::Cuda)).pairs, cpu) << what;
         const cuda::QueryProfile p = cuda::lastQueryProfile();
         EXPECT_EQ(p.spans, *c.spans == '1') << what;
+        EXPECT_TRUE(p.warp_scan) << what;
+        EXPECT_EQ(p.staged_pairs, c.stage == nullptr || *c.stage == '1') << what;
+        if (c.cap != nullptr) EXPECT_GE(p.passes, 2) << what << ": the overflow path did not run";
         if (*cells == '1') {
           EXPECT_TRUE(p.self_cell_pairs) << what;
           if (c.rows) EXPECT_EQ(p.cell_rows, std::atoi(c.rows)) << what;
@@ -1340,6 +1361,76 @@ std::size_t largestSegment(const std::vector<std::vector<TrianglePair>>& runs,
   return most;
 }
 #endif
+
+TYPED_TEST(CudaQueryTyped, FixedPointCellRangesAreTheDoubleRangesUpToTheirLimit) {
+  // The warp-wide scan takes each level's cell range and sub-cell corners from the query box's
+  // fixed-point coordinates (KDET_FCL_CUDA_FIXED_CELLS, default on) where the hash's level-0
+  // cell coordinates fit in 28 bits, and from the box in double (as with the knob at 0) where
+  // they do not. Both must give the same candidates and the CPU's pairs. Scenes: a random soup
+  // of extent 1 with one triangle of diameter about 5e-9 (level-0 cells that small: coordinates
+  // of 28 bits, so fixed-point ones up to near 2^32, the most that fits) or about 1e-9 (30 bits:
+  // the double ranges whatever the knob), self and against a second soup; with the sub-cell
+  // spans on and off, and 1 or 8 lanes per query.
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  auto soupWithSpeck = [](double edge, std::uint64_t seed) {
+    TriangleMesh<S> m = makeRandomSoup<S>(3001, S(1), S(1e-3), S(0.2), seed);
+    m.addTriangle({S(0), S(0), S(0)}, {S(edge), S(0), S(0)}, {S(0), S(edge), S(0)});
+    return m;
+  };
+  // The level-0 coordinate bits of a hash, as the device's build computes them (the CPU hash has
+  // the same grid): those of the largest level-0 coordinate of the bounds' max corner.
+  auto coordBits = [](const HashedMesh<S>& m) {
+    const auto& h = m.hash();
+    std::int64_t cmax = 0;
+    for (int a = 0; a < 3; ++a)
+      cmax = std::max(cmax, detail::cellCoordScaled(h.bounds.hi[a], a, 1.0, h.grid));
+    int bits = 1;
+    while (bits < 63 && (cmax >> bits) != 0) ++bits;
+    return bits;
+  };
+  struct Scene {
+    const char* what;
+    double edge;
+    int bits;
+  };
+  cuda::setProfiling(true);
+  for (const Scene sc : {Scene{"28-bit soup", 4e-9, 28}, Scene{"30-bit soup", 9e-10, 30}}) {
+    HashedMesh<S> a(soupWithSpeck(sc.edge, 21)), b(soupWithSpeck(sc.edge, 22));
+    ASSERT_EQ(coordBits(a), sc.bits) << sc.what;
+    ASSERT_EQ(coordBits(b), sc.bits) << sc.what;
+    const bool fits = sc.bits <= 28;
+    using Run = std::function<QueryResult(const QueryOptions&)>;
+    const std::pair<std::string, Run> queries[] = {
+        {"self", [&](const QueryOptions& o) { return intersectSelf(a, o); }},
+        {"inter", [&](const QueryOptions& o) { return intersectMeshes(a, b, o); }},
+    };
+    for (const auto& [kind, run] : queries) {
+      const std::vector<TrianglePair> cpu = sorted(run(on(Backend::Cpu)).pairs);
+      EXPECT_GT(cpu.size(), 10u) << sc.what << " " << kind;
+      for (const char* spans : {"1", "0"})
+        for (const char* lanes : {"1", "8"}) {
+          kdet_test::ScopedEnv sp("KDET_FCL_CUDA_SPANS", spans),
+              ln("KDET_FCL_CUDA_WARP_LANES", lanes);
+          long long candidates = -1;
+          for (const char* fixed : {"1", "0"}) {
+            kdet_test::ScopedEnv fx("KDET_FCL_CUDA_FIXED_CELLS", fixed);
+            const std::string what = std::string(sc.what) + " " + kind + ", spans " + spans +
+                                     ", lanes " + lanes + ", fixed " + fixed;
+            EXPECT_EQ(run(on(Backend::Cuda)).pairs, cpu) << what;
+            const cuda::QueryProfile p = cuda::lastQueryProfile();
+            EXPECT_TRUE(p.warp_scan) << what;
+            EXPECT_EQ(p.fixed_cells, *fixed == '1' && fits) << what;
+            if (candidates < 0) candidates = static_cast<long long>(p.candidates);
+            EXPECT_EQ(static_cast<long long>(p.candidates), candidates) << what;
+          }
+        }
+    }
+  }
+  cuda::setProfiling(false);
+#endif
+}
 
 TYPED_TEST(CudaQueryTyped, AdjacencyByIndexInPhaseOneDropsTheCoordinateNeighboursLater) {
   // A self query drops the pairs of triangles that share a vertex (by index or by coordinates).
