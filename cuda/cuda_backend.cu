@@ -669,6 +669,9 @@ struct PairSink {
   int seg_shift = 0;
   unsigned long long* big = nullptr;
   unsigned int seg_max = kSegmentMax;
+  /// The kernels that can emit a warp's pairs together (the warp-wide phase 1, the plane filter,
+  /// the exact tests) stage them in shared memory (stagePair; KDET_FCL_CUDA_STAGE_PAIRS).
+  bool staged = false;
 };
 
 __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, std::uint32_t b) {
@@ -733,6 +736,33 @@ __device__ __forceinline__ void flushStage(const PairSink& out, PairStage& st) {
   if (st.fill > 0) moveStaged(out, st, st.fill);
   __syncwarp();
   st.fill = 0;
+}
+
+/// A warp's emission of its lanes' pairs (a, b) where `hit`: through the warp's stage when the
+/// sink says so (PairSink::staged), else by emitPair. Every lane of the warp must call.
+__device__ __forceinline__ void emitFromWarp(const PairSink& out, PairStage& st, bool hit,
+                                             std::uint32_t a, std::uint32_t b) {
+  if (out.staged) stagePair(out, st, hit, a, b);
+  else if (hit) emitPair(out, a, b);
+}
+
+/// The end of a kernel's emissions by emitFromWarp. Every lane of the warp must call.
+__device__ __forceinline__ void finishWarp(const PairSink& out, PairStage& st) {
+  if (out.staged) flushStage(out, st);
+}
+
+/// Calls body(k, valid) for the indices k of [0, m) in grid-stride order, the 32 lanes of a
+/// warp on 32 consecutive ones, every lane in every round (valid: k < m), so that the body can
+/// emit with warp-wide operations (emitFromWarp).
+template <class Body>
+__device__ __forceinline__ void forEachWarpStride(unsigned long long m, Body&& body) {
+  const unsigned long long stride = static_cast<unsigned long long>(gridDim.x) * blockDim.x;
+  for (unsigned long long w = static_cast<unsigned long long>(blockIdx.x) * blockDim.x +
+                              (threadIdx.x & ~31u);
+       w < m; w += stride) {
+    const unsigned long long k = w + (threadIdx.x & 31u);
+    body(k, k < m);
+  }
 }
 
 /// One round of a query pass: phase 1, filter and exact tests of one contiguous range of the
@@ -957,10 +987,10 @@ template <class S, int MB, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, MB)
     selfCandidatesWarpKernel(HashView<S> M, std::uint32_t n, unsigned int log_p,
                              std::uint32_t max_visit, int level_skip, bool size_by_level,
-                             bool by_index, bool fixed_cells, bool staged, std::uint32_t split,
-                             Round round, PairSink cand, unsigned long long* tasks) {
+                             bool by_index, bool fixed_cells, std::uint32_t split, Round round,
+                             PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
-  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (staged)
+  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -995,11 +1025,10 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                           : selfCandidate(M, split, o.id, j, false);
         },
         [&](bool hit, std::uint32_t a, std::uint32_t b) {
-          if (staged) stagePair(cand, stage, hit, a, b);
-          else if (hit) emitPair(cand, a, b);
+          emitFromWarp(cand, stage, hit, a, b);
         });
   });
-  if (staged) flushStage(cand, stage);
+  finishWarp(cand, stage);
 }
 
 /// A triangle's box, its coordinates loaded at once for float (loadBox), plainly for double.
@@ -1038,12 +1067,12 @@ template <class S, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, 8)
     selfCellPairsKernel(HashView<S> M, const std::uint32_t* __restrict__ block_cell,
                         std::uint32_t cell_cap, std::uint32_t rows, std::uint32_t max_visit,
-                        bool by_index, bool staged, std::uint32_t split, Round round,
-                        PairSink cand, unsigned long long* tasks) {
+                        bool by_index, std::uint32_t split, Round round, PairSink cand,
+                        unsigned long long* tasks) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
   __shared__ TriIndices row_tris[kQueryBlock / 32][32];  // (by_index)
-  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (staged)
+  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
   Aabb<S>* const row_box = row_boxes[threadIdx.x >> 5];
   TriIndices* const row_tri = row_tris[threadIdx.x >> 5];
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
@@ -1106,11 +1135,9 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
           if (bpos >= m) bpos -= m;
           const std::uint32_t b = o_begin + bpos;
           const std::uint32_t w = __ldg(M.entry_tri + b);
-          const std::uint32_t w_span = kSpans ? __ldg(M.entry_span + b) : 0u;
-          // This cell is the pair's canonical cell, and (kSpans) their spans overlap in it (no
-          // short circuit: both loads issue together).
-          if ((((o_v | w) >> 29) != 7u) | (kSpans && !detail::subcellSpansOverlap(o_span, w_span)))
-            break;
+          // This cell is the pair's canonical cell, and (kSpans) their spans overlap in it.
+          if (((o_v | w) >> 29) != 7u) break;
+          if (kSpans && !detail::subcellSpansOverlap(o_span, __ldg(M.entry_span + b))) break;
           i = o_v & kEntryTriMask, j = w & kEntryTriMask;
           const Aabb<S> e = loadBoxOf(M.box + j);
           // (by_index: the partner's vertex indices come in the same round trip as its box.)
@@ -1121,14 +1148,12 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
           hit = overlap && (by_index ? selfCandidateByIndex(split, i, j, row_tri[owner], tj)
                                      : selfCandidate(M, split, i, j, false));
         } while (false);
-        const std::uint32_t lo = i < j ? i : j, hi = i < j ? j : i;
-        if (staged) stagePair(cand, stage, hit, lo, hi);
-        else if (hit) emitPair(cand, lo, hi);
+        emitFromWarp(cand, stage, hit, i < j ? i : j, i < j ? j : i);
       }
       next += cnt;
     }
   }
-  if (staged) flushStage(cand, stage);
+  finishWarp(cand, stage);
 }
 
 /// Phase 1 of an inter-object query with the warp-wide scan: the same candidates as
@@ -1141,10 +1166,10 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                               std::uint32_t na, std::uint32_t nb, bool identity,
                               Transform<double> b_to_a, double eps_coef, double eps_tmag,
                               unsigned int log_p, std::uint32_t max_visit, bool size_by_level,
-                              bool fixed_cells, bool staged, Round round, PairSink cand,
+                              bool fixed_cells, Round round, PairSink cand,
                               unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
-  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (staged)
+  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -1182,8 +1207,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
       mine.live = (none || detail::isEmpty(mine.box)) ? 0u : 1u;
     }
     const auto emit = [&](bool hit, std::uint32_t a, std::uint32_t b) {
-      if (staged) stagePair(cand, stage, hit, a, b);
-      else if (hit) emitPair(cand, a, b);
+      emitFromWarp(cand, stage, hit, a, b);
     };
     if (a_side)
       scanCandidatesWarp<kSpans>(
@@ -1206,7 +1230,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
           },
           emit);
   });
-  if (staged) flushStage(cand, stage);
+  finishWarp(cand, stage);
 }
 
 /// Phase 2: the exact test of each candidate (grid-stride over the device-side count, so the
@@ -1218,15 +1242,21 @@ __global__ void __launch_bounds__(kQueryBlock)
                      unsigned long long capacity, const Vec3<S>* __restrict__ va,
                      const std::uint32_t* __restrict__ ta, const Vec3<S>* __restrict__ vb,
                      const std::uint32_t* __restrict__ tb, PairSink out) {
+  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (out.staged)
+  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const unsigned long long m = *count < capacity ? *count : capacity;
-  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
-       k += gridDim.x * blockDim.x) {
-    const unsigned long long c = cand[k];
-    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-    if (detail::trianglesIntersectWith<K>(va[ta[3 * i]], va[ta[3 * i + 1]], va[ta[3 * i + 2]],
-                                          vb[tb[3 * j]], vb[tb[3 * j + 1]], vb[tb[3 * j + 2]]))
-      emitPair(out, i, j);
-  }
+  forEachWarpStride(m, [&](unsigned long long k, bool valid) {
+    bool hit = false;
+    std::uint32_t i = 0, j = 0;
+    if (valid) {
+      const unsigned long long c = cand[k];
+      i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+      hit = detail::trianglesIntersectWith<K>(va[ta[3 * i]], va[ta[3 * i + 1]], va[ta[3 * i + 2]],
+                                              vb[tb[3 * j]], vb[tb[3 * j + 1]], vb[tb[3 * j + 2]]);
+    }
+    emitFromWarp(out, stage, hit, i, j);
+  });
+  finishWarp(out, stage);
 }
 
 /// Phase 2 of a self query: pairs sharing a vertex (index or coordinates) are adjacent, not
@@ -1242,36 +1272,43 @@ __global__ void __launch_bounds__(kQueryBlock)
                     unsigned long long capacity, const Vec3<S>* __restrict__ v,
                     const std::uint32_t* __restrict__ t, std::uint32_t split, int cat_shift,
                     PairSink out) {
+  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (out.staged)
+  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const unsigned long long m = *count < capacity ? *count : capacity;
-  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
-       k += gridDim.x * blockDim.x) {
-    const unsigned long long c = cand[k];
-    auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-    const bool same = sameMesh(split, i, j);
-    if (!same && i > j) {
-      const std::uint32_t x = i;
-      i = j;
-      j = x;
-    }
-    const std::uint32_t ti[3] = {t[3 * i], t[3 * i + 1], t[3 * i + 2]};
-    const std::uint32_t tj[3] = {t[3 * j], t[3 * j + 1], t[3 * j + 2]};
-    const Vec3<S> vi[3] = {v[ti[0]], v[ti[1]], v[ti[2]]};
-    const Vec3<S> vj[3] = {v[tj[0]], v[tj[1]], v[tj[2]]};
-    bool adjacent = false;
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b] || vi[a] == vj[b];
-    adjacent = adjacent && same;
-    if (!adjacent &&
-        detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2])) {
-      std::uint32_t a = i < j ? i : j, b = i < j ? j : i;
-      if (split > 0 && b >= split) {  // the second mesh's own pair, or one across
-        const std::uint32_t cat = a >= split ? 1u : 2u;
-        a = (cat << cat_shift) | (cat == 1u ? a - split : a);
-        b -= split;
+  forEachWarpStride(m, [&](unsigned long long k, bool valid) {
+    bool hit = false;
+    std::uint32_t pa = 0, pb = 0;  // the pair as emitted
+    if (valid) {
+      const unsigned long long c = cand[k];
+      auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+      const bool same = sameMesh(split, i, j);
+      if (!same && i > j) {
+        const std::uint32_t x = i;
+        i = j;
+        j = x;
       }
-      emitPair(out, a, b);
+      const std::uint32_t ti[3] = {t[3 * i], t[3 * i + 1], t[3 * i + 2]};
+      const std::uint32_t tj[3] = {t[3 * j], t[3 * j + 1], t[3 * j + 2]};
+      const Vec3<S> vi[3] = {v[ti[0]], v[ti[1]], v[ti[2]]};
+      const Vec3<S> vj[3] = {v[tj[0]], v[tj[1]], v[tj[2]]};
+      bool adjacent = false;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b] || vi[a] == vj[b];
+      adjacent = adjacent && same;
+      if (!adjacent &&
+          detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2])) {
+        hit = true;
+        pa = i < j ? i : j, pb = i < j ? j : i;
+        if (split > 0 && pb >= split) {  // the second mesh's own pair, or one across
+          const std::uint32_t cat = pa >= split ? 1u : 2u;
+          pa = (cat << cat_shift) | (cat == 1u ? pa - split : pa);
+          pb -= split;
+        }
+      }
     }
-  }
+    emitFromWarp(out, stage, hit, pa, pb);
+  });
+  finishWarp(out, stage);
 }
 
 /// True when the filter proves all three vertices of triangle p strictly on one side of the
@@ -1307,15 +1344,21 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
                       const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
                       const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
                       PairSink out) {
+  __shared__ unsigned long long stage_keys[kFilterBlock / 32][64];  // (out.staged)
+  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const unsigned long long m = *count < capacity ? *count : capacity;
-  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
-       k += gridDim.x * blockDim.x) {
-    const unsigned long long c = cand[k];
-    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-    const bool drop = strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
-                      strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j));
-    if (!drop) emitPair(out, i, j);
-  }
+  forEachWarpStride(m, [&](unsigned long long k, bool valid) {
+    bool keep = false;
+    std::uint32_t i = 0, j = 0;
+    if (valid) {
+      const unsigned long long c = cand[k];
+      i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+      keep = !(strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
+               strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j)));
+    }
+    emitFromWarp(out, stage, keep, i, j);
+  });
+  finishWarp(out, stage);
 }
 
 /// Adds `by` to n vertex indices: the second mesh's triangles of two meshes hashed as one.
@@ -2329,6 +2372,15 @@ unsigned long long capacityKnob() {
   return detail::numberKnob("KDET_FCL_CUDA_PAIR_CAPACITY", 0, std::uint64_t(1) << 40, 0);
 }
 
+/// Whether the kernels that emit pairs a warp at a time (the warp-wide phase 1: the warp scans
+/// and the cells' pairs; the plane filter; the exact tests) emit them through a warp's stage in
+/// shared memory, 32 per atomic (stagePair), or each group of lanes with its own atomic
+/// (emitPair): KDET_FCL_CUDA_STAGE_PAIRS unset or 1, or 0 (PairSink::staged). The tile scan's
+/// phase 1 always takes the atomic per group. Read at every query, so tests and benchmarks can
+/// compare the two; both give the same candidates and pairs (in another order before the
+/// output's order).
+bool stagedPairs() { return detail::switchKnob("KDET_FCL_CUDA_STAGE_PAIRS", true); }
+
 /// The plane filter between the phases (Predicate::Exact only): KDET_FCL_CUDA_PLANE_FILTER=0
 /// turns it off (default on; read at every query, so tests and benchmarks can compare both).
 bool planeFilterOn() { return detail::switchKnob("KDET_FCL_CUDA_PLANE_FILTER", true); }
@@ -2461,6 +2513,8 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   const std::size_t segments = std::size_t(1) << (upper_bits - seg_shift);
   const bool counting = countOrderAllowed();
   const unsigned int seg_max = segmentMax();
+  const bool staged = stagedPairs();
+  ctx.profile.staged_pairs = staged;
   if (counting) ctx.segs.reserve(segments);
   while (true) {
     ++passes;
@@ -2471,11 +2525,13 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     const std::uint32_t rounds = plan.total();
     for (std::uint32_t r = 0; r < rounds; ++r) {
       if (r > 0) ctx.markRound(r, 0);
-      filtered = launch(PairSink{ctx.cands.data(), w + kCandCount, cand_cap, 32},
-                        PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32},
+      filtered = launch(PairSink{ctx.cands.data(), w + kCandCount, cand_cap, 32, nullptr, 0,
+                                 nullptr, kSegmentMax, staged},
+                        PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32, nullptr,
+                                 0, nullptr, kSegmentMax, staged},
                         PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits,
                                  counting ? ctx.segs.data() : nullptr, seg_shift,
-                                 w + kBigSegment, seg_max},
+                                 w + kBigSegment, seg_max, staged},
                         plan.at(r));
       checkLaunch();
       if (rounds > 1) {
@@ -2738,13 +2794,6 @@ bool sizeByLevel() { return detail::switchKnob("KDET_FCL_CUDA_SIZE_BY_LEVEL", tr
 /// Read at every query, so tests and benchmarks can compare the two; both give the same ranges.
 bool fixedCellsKnob() { return detail::switchKnob("KDET_FCL_CUDA_FIXED_CELLS", true); }
 
-/// Whether the warp-wide candidate kernels (the warp scans and the cells' pairs) emit their
-/// candidates through a warp's stage in shared memory, 32 at a time (stagePair), or each group
-/// of lanes with its own atomic (emitPair): KDET_FCL_CUDA_STAGE_PAIRS unset or 1, or 0. Read at
-/// every query, so tests and benchmarks can compare the two; both give the same candidates (in
-/// another order).
-bool stagedPairs() { return detail::switchKnob("KDET_FCL_CUDA_STAGE_PAIRS", true); }
-
 /// Whether a self query's phase 1 applies the adjacency rule by vertex index only
 /// (selfCandidate's by_index: the entry's indices come with its box, and the pairs that share a
 /// vertex by coordinates alone are dropped by the exact kernel), for a mesh (or two hashed as
@@ -2969,13 +3018,11 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const bool warp = warpScan();
   const bool size_by_level = warp && sizeByLevel();
   const bool fixed_cells = warp && fixedCellsKnob();
-  const bool staged = stagedPairs();
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
   ctx.profile.fixed_cells = fixed_cells && A.info.coord_bits <= kFixedCoordBits &&
                             B.info.coord_bits <= kFixedCoordBits;
-  ctx.profile.staged_pairs = staged && warp;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
@@ -2993,8 +3040,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
       const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
       kernel<<<wl.blocks, kQueryBlock, 0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a,
                                                eps_coef, eps_tmag, log_p, warpVisit(),
-                                               size_by_level, fixed_cells, staged, round, cand,
-                                               wl.tasks);
+                                               size_by_level, fixed_cells, round, cand, wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -3050,13 +3096,11 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   const int level_skip = cell_pairs ? 1 : 0;
   const bool size_by_level = warp && sizeByLevel();
   const bool fixed_cells = warp && fixedCellsKnob();
-  const bool staged = stagedPairs();
   const bool by_index = indexAdjacency(M.nv, n);
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
   ctx.profile.fixed_cells = fixed_cells && M.info.coord_bits <= kFixedCoordBits;
-  ctx.profile.staged_pairs = staged && (cell_pairs || warp);
   ctx.profile.index_adjacency = by_index;
   ctx.profile.self_cell_pairs = cell_pairs;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
@@ -3071,7 +3115,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
           kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
       kernel<<<blocks, kQueryBlock, 0, s>>>(mv, M.block_cell.data(),
                                             M.pending ? M.pending_cell_cap : M.cell_cap, rows,
-                                            warpVisit(), by_index, staged, split, round, cand,
+                                            warpVisit(), by_index, split, round, cand,
                                             ctx.cellTasks());
       checkLaunch();
       // The round's candidates so far are the cells' (cell_candidates; the stages' rounds).
@@ -3087,8 +3131,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
         const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
         const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
         kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip,
-                                                 size_by_level, by_index, fixed_cells, staged,
-                                                 split, round, cand, wl.tasks);
+                                                 size_by_level, by_index, fixed_cells, split,
+                                                 round, cand, wl.tasks);
       } else {
         withTile([&](auto g, auto mb) {
           constexpr int G = decltype(g)::value;
