@@ -669,8 +669,8 @@ struct PairSink {
   int seg_shift = 0;
   unsigned long long* big = nullptr;
   unsigned int seg_max = kSegmentMax;
-  /// The kernels that can emit a warp's pairs together (the warp-wide phase 1, the plane filter,
-  /// the exact tests) stage them in shared memory (stagePair; KDET_FCL_CUDA_STAGE_PAIRS).
+  /// A candidate sink of the warp-wide phase 1 (the warp scans, the cells' pairs): its kernels
+  /// stage their pairs in shared memory (stagePair; KDET_FCL_CUDA_STAGE_PAIRS).
   bool staged = false;
 };
 
@@ -749,20 +749,6 @@ __device__ __forceinline__ void emitFromWarp(const PairSink& out, PairStage& st,
 /// The end of a kernel's emissions by emitFromWarp. Every lane of the warp must call.
 __device__ __forceinline__ void finishWarp(const PairSink& out, PairStage& st) {
   if (out.staged) flushStage(out, st);
-}
-
-/// Calls body(k, valid) for the indices k of [0, m) in grid-stride order, the 32 lanes of a
-/// warp on 32 consecutive ones, every lane in every round (valid: k < m), so that the body can
-/// emit with warp-wide operations (emitFromWarp).
-template <class Body>
-__device__ __forceinline__ void forEachWarpStride(unsigned long long m, Body&& body) {
-  const unsigned long long stride = static_cast<unsigned long long>(gridDim.x) * blockDim.x;
-  for (unsigned long long w = static_cast<unsigned long long>(blockIdx.x) * blockDim.x +
-                              (threadIdx.x & ~31u);
-       w < m; w += stride) {
-    const unsigned long long k = w + (threadIdx.x & 31u);
-    body(k, k < m);
-  }
 }
 
 /// One round of a query pass: phase 1, filter and exact tests of one contiguous range of the
@@ -1242,21 +1228,15 @@ __global__ void __launch_bounds__(kQueryBlock)
                      unsigned long long capacity, const Vec3<S>* __restrict__ va,
                      const std::uint32_t* __restrict__ ta, const Vec3<S>* __restrict__ vb,
                      const std::uint32_t* __restrict__ tb, PairSink out) {
-  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (out.staged)
-  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const unsigned long long m = *count < capacity ? *count : capacity;
-  forEachWarpStride(m, [&](unsigned long long k, bool valid) {
-    bool hit = false;
-    std::uint32_t i = 0, j = 0;
-    if (valid) {
-      const unsigned long long c = cand[k];
-      i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-      hit = detail::trianglesIntersectWith<K>(va[ta[3 * i]], va[ta[3 * i + 1]], va[ta[3 * i + 2]],
-                                              vb[tb[3 * j]], vb[tb[3 * j + 1]], vb[tb[3 * j + 2]]);
-    }
-    emitFromWarp(out, stage, hit, i, j);
-  });
-  finishWarp(out, stage);
+  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
+       k += gridDim.x * blockDim.x) {
+    const unsigned long long c = cand[k];
+    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+    if (detail::trianglesIntersectWith<K>(va[ta[3 * i]], va[ta[3 * i + 1]], va[ta[3 * i + 2]],
+                                          vb[tb[3 * j]], vb[tb[3 * j + 1]], vb[tb[3 * j + 2]]))
+      emitPair(out, i, j);
+  }
 }
 
 /// Phase 2 of a self query: pairs sharing a vertex (index or coordinates) are adjacent, not
@@ -1272,43 +1252,36 @@ __global__ void __launch_bounds__(kQueryBlock)
                     unsigned long long capacity, const Vec3<S>* __restrict__ v,
                     const std::uint32_t* __restrict__ t, std::uint32_t split, int cat_shift,
                     PairSink out) {
-  __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (out.staged)
-  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const unsigned long long m = *count < capacity ? *count : capacity;
-  forEachWarpStride(m, [&](unsigned long long k, bool valid) {
-    bool hit = false;
-    std::uint32_t pa = 0, pb = 0;  // the pair as emitted
-    if (valid) {
-      const unsigned long long c = cand[k];
-      auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-      const bool same = sameMesh(split, i, j);
-      if (!same && i > j) {
-        const std::uint32_t x = i;
-        i = j;
-        j = x;
-      }
-      const std::uint32_t ti[3] = {t[3 * i], t[3 * i + 1], t[3 * i + 2]};
-      const std::uint32_t tj[3] = {t[3 * j], t[3 * j + 1], t[3 * j + 2]};
-      const Vec3<S> vi[3] = {v[ti[0]], v[ti[1]], v[ti[2]]};
-      const Vec3<S> vj[3] = {v[tj[0]], v[tj[1]], v[tj[2]]};
-      bool adjacent = false;
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b] || vi[a] == vj[b];
-      adjacent = adjacent && same;
-      if (!adjacent &&
-          detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2])) {
-        hit = true;
-        pa = i < j ? i : j, pb = i < j ? j : i;
-        if (split > 0 && pb >= split) {  // the second mesh's own pair, or one across
-          const std::uint32_t cat = pa >= split ? 1u : 2u;
-          pa = (cat << cat_shift) | (cat == 1u ? pa - split : pa);
-          pb -= split;
-        }
-      }
+  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
+       k += gridDim.x * blockDim.x) {
+    const unsigned long long c = cand[k];
+    auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+    const bool same = sameMesh(split, i, j);
+    if (!same && i > j) {
+      const std::uint32_t x = i;
+      i = j;
+      j = x;
     }
-    emitFromWarp(out, stage, hit, pa, pb);
-  });
-  finishWarp(out, stage);
+    const std::uint32_t ti[3] = {t[3 * i], t[3 * i + 1], t[3 * i + 2]};
+    const std::uint32_t tj[3] = {t[3 * j], t[3 * j + 1], t[3 * j + 2]};
+    const Vec3<S> vi[3] = {v[ti[0]], v[ti[1]], v[ti[2]]};
+    const Vec3<S> vj[3] = {v[tj[0]], v[tj[1]], v[tj[2]]};
+    bool adjacent = false;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b] || vi[a] == vj[b];
+    adjacent = adjacent && same;
+    if (!adjacent &&
+        detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2])) {
+      std::uint32_t a = i < j ? i : j, b = i < j ? j : i;
+      if (split > 0 && b >= split) {  // the second mesh's own pair, or one across
+        const std::uint32_t cat = a >= split ? 1u : 2u;
+        a = (cat << cat_shift) | (cat == 1u ? a - split : a);
+        b -= split;
+      }
+      emitPair(out, a, b);
+    }
+  }
 }
 
 /// True when the filter proves all three vertices of triangle p strictly on one side of the
@@ -1344,21 +1317,15 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
                       const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
                       const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
                       PairSink out) {
-  __shared__ unsigned long long stage_keys[kFilterBlock / 32][64];  // (out.staged)
-  PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const unsigned long long m = *count < capacity ? *count : capacity;
-  forEachWarpStride(m, [&](unsigned long long k, bool valid) {
-    bool keep = false;
-    std::uint32_t i = 0, j = 0;
-    if (valid) {
-      const unsigned long long c = cand[k];
-      i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-      keep = !(strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
-               strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j)));
-    }
-    emitFromWarp(out, stage, keep, i, j);
-  });
-  finishWarp(out, stage);
+  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
+       k += gridDim.x * blockDim.x) {
+    const unsigned long long c = cand[k];
+    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+    const bool drop = strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
+                      strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j));
+    if (!drop) emitPair(out, i, j);
+  }
 }
 
 /// Adds `by` to n vertex indices: the second mesh's triangles of two meshes hashed as one.
@@ -2372,13 +2339,13 @@ unsigned long long capacityKnob() {
   return detail::numberKnob("KDET_FCL_CUDA_PAIR_CAPACITY", 0, std::uint64_t(1) << 40, 0);
 }
 
-/// Whether the kernels that emit pairs a warp at a time (the warp-wide phase 1: the warp scans
-/// and the cells' pairs; the plane filter; the exact tests) emit them through a warp's stage in
-/// shared memory, 32 per atomic (stagePair), or each group of lanes with its own atomic
-/// (emitPair): KDET_FCL_CUDA_STAGE_PAIRS unset or 1, or 0 (PairSink::staged). The tile scan's
-/// phase 1 always takes the atomic per group. Read at every query, so tests and benchmarks can
-/// compare the two; both give the same candidates and pairs (in another order before the
-/// output's order).
+/// Whether the warp-wide phase 1 (the warp scans and the cells' pairs) emits its candidates
+/// through a warp's stage in shared memory, 32 per atomic (stagePair), or each group of lanes
+/// with its own atomic (emitPair): KDET_FCL_CUDA_STAGE_PAIRS unset or 1, or 0 (PairSink::staged,
+/// on the candidates' sink). The tile scan, the plane filter and the exact tests take the atomic
+/// per group (staging them too measured no faster: benchmarks/RESULTS-gpu.md). Read at every
+/// query, so tests and benchmarks can compare the two; both give the same candidates (in
+/// another order).
 bool stagedPairs() { return detail::switchKnob("KDET_FCL_CUDA_STAGE_PAIRS", true); }
 
 /// The plane filter between the phases (Predicate::Exact only): KDET_FCL_CUDA_PLANE_FILTER=0
@@ -2527,11 +2494,10 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       if (r > 0) ctx.markRound(r, 0);
       filtered = launch(PairSink{ctx.cands.data(), w + kCandCount, cand_cap, 32, nullptr, 0,
                                  nullptr, kSegmentMax, staged},
-                        PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32, nullptr,
-                                 0, nullptr, kSegmentMax, staged},
+                        PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32},
                         PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits,
                                  counting ? ctx.segs.data() : nullptr, seg_shift,
-                                 w + kBigSegment, seg_max, staged},
+                                 w + kBigSegment, seg_max},
                         plan.at(r));
       checkLaunch();
       if (rounds > 1) {

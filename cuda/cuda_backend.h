@@ -185,9 +185,9 @@ struct QueryProfile {
                              ///< coordinates (KDET_FCL_CUDA_FIXED_CELLS; hashes whose level-0
                              ///< cell coordinates fit in 28 bits, as of their last build read
                              ///< back; the device decides on its own copy of the build info)
-  bool staged_pairs = false;  ///< the warp-wide phase 1 (warp scan, cells' pairs), the plane
-                              ///< filter and the exact tests emitted their pairs through a
-                              ///< warp's stage in shared memory (KDET_FCL_CUDA_STAGE_PAIRS)
+  bool staged_pairs = false;  ///< the warp-wide phase 1 (warp scan, cells' pairs) emitted its
+                              ///< candidates through a warp's stage in shared memory
+                              ///< (KDET_FCL_CUDA_STAGE_PAIRS; the tile scan's never are)
   bool index_adjacency = false;  ///< a self query's phase 1 dropped the pairs sharing a vertex by
                                  ///< index only; those sharing one by coordinates alone were
                                  ///< candidates, dropped by the exact kernel

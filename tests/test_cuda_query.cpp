@@ -1122,11 +1122,11 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
   // with KDET_FCL_CUDA_SYNC_REHASH: another build path), with the cells' partners cut into
   // visits of one entry (KDET_FCL_CUDA_WARP_VISIT=1) or not, with the sub-cell span filter on
   // and off (KDET_FCL_CUDA_SPANS), with 1 to 32 entries per warp task of the cells' pairs
-  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density and the size), with the pairs of
-  // phase 1, the plane filter and the exact tests emitted through each warp's stage in shared
-  // memory or one atomic per group of lanes (KDET_FCL_CUDA_STAGE_PAIRS), and with the first
-  // pass's buffers capped at 3 pairs (KDET_FCL_CUDA_PAIR_CAPACITY: the stages' pairs past the
-  // capacity are counted, not written, and the query reruns).
+  // (KDET_FCL_CUDA_CELL_ROWS; by default 8 or 32 by the density and the size), with the
+  // candidates of the cells and of the scan emitted through each warp's stage in shared memory or
+  // one atomic per group of lanes (KDET_FCL_CUDA_STAGE_PAIRS), and with the first pass's buffers
+  // capped at 3 pairs (KDET_FCL_CUDA_PAIR_CAPACITY: the stages' candidates past the capacity are
+  // counted, not written, and the query reruns).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
