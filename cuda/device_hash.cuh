@@ -381,7 +381,7 @@ struct WarpQuery {
   /// diameter is loaded and tested (KDET_FCL_CUDA_SIZE_BY_LEVEL=0).
   std::int16_t size_level;
   /// The box's fixed-point coordinates (fixedCoord; lo x, y, z, then hi x, y, z), from which
-  /// the scan takes every level's cell range and sub-cell corners with shifts (startLevel). Set
+  /// the scan takes every level's cell range and sub-cell corners with shifts (levelRange). Set
   /// by scanCandidatesWarp when it runs fixed (fixedCells).
   std::uint32_t fine[6];
 };
@@ -408,7 +408,7 @@ __device__ __forceinline__ bool fixedCells(bool fixed, const BuildInfo& info) {
 /// exact and floor(floor(y) / 2^k) = floor(y / 2^k), on every level L the coordinate shifted
 /// right by L + kSubcellBits is detail::cellCoord(x, L), and shifted right by L it is the
 /// sub-cell coordinate from which subcellSpanCorners takes its 4 bits (the low 4 bits, which
-/// need no clamp): fixedRange.
+/// need no clamp): levelRange.
 __device__ __forceinline__ std::uint32_t fixedCoord(double x, int axis,
                                                     const detail::GridParams& g) {
   return static_cast<std::uint32_t>(
