@@ -674,13 +674,18 @@ struct PairSink {
   bool staged = false;
 };
 
+/// Counts pair (a, .) in its segment when the sink's pairs are ordered by counting.
+__device__ __forceinline__ void countSegment(const PairSink& out, std::uint32_t a) {
+  if (out.seg != nullptr && atomicAdd(out.seg + (a >> out.seg_shift), 1u) == out.seg_max)
+    *out.big = 1;  // the segment's pair seg_max + 1: the radix sort orders this query
+}
+
 __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, std::uint32_t b) {
   // One atomic per group of threads emitting together (they are usually a warp's worth).
   const unsigned long long idx = groupIncrement(out.count, cg::coalesced_threads());
   if (idx < out.capacity)
     out.pairs[idx] = (static_cast<unsigned long long>(a) << out.b_bits) | b;
-  if (out.seg != nullptr && atomicAdd(out.seg + (a >> out.seg_shift), 1u) == out.seg_max)
-    *out.big = 1;  // the segment's pair seg_max + 1: the radix sort orders this query
+  countSegment(out, a);
 }
 
 /// A warp's staging area for the pairs it emits (stagePair): 64 keys in shared memory and their
@@ -715,8 +720,7 @@ __device__ __forceinline__ void stagePair(const PairSink& out, PairStage& st, bo
   if (hit) {
     st.keys[st.fill + __popc(m & ((1u << lane) - 1u))] =
         (static_cast<unsigned long long>(a) << out.b_bits) | b;
-    if (out.seg != nullptr && atomicAdd(out.seg + (a >> out.seg_shift), 1u) == out.seg_max)
-      *out.big = 1;
+    countSegment(out, a);
   }
   st.fill += __popc(m);
   if (st.fill < 32) return;
@@ -2987,8 +2991,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
-  ctx.profile.fixed_cells = fixed_cells && A.info.coord_bits <= kFixedCoordBits &&
-                            B.info.coord_bits <= kFixedCoordBits;
+  ctx.profile.fixed_cells = fixedCells(fixed_cells, A.info) && fixedCells(fixed_cells, B.info);
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     // Views and grids are taken at every pass: a failed re-hash rebuilds between passes.
     const HashView<S> av = A.view(), bv = B.view();
@@ -3066,7 +3069,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
-  ctx.profile.fixed_cells = fixed_cells && M.info.coord_bits <= kFixedCoordBits;
+  ctx.profile.fixed_cells = fixedCells(fixed_cells, M.info);
   ctx.profile.index_adjacency = by_index;
   ctx.profile.self_cell_pairs = cell_pairs;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {

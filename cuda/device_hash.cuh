@@ -395,7 +395,8 @@ constexpr int kFixedCoordBits = 32 - detail::kSubcellBits;
 /// fixed-point coordinates: asked for (KDET_FCL_CUDA_FIXED_CELLS, `fixed`) and the hash's
 /// coordinates small enough (kFixedCoordBits). Else each level's range is computed from the
 /// box in double (detail::cellRange), as the other scans do. Both give the same ranges.
-__device__ __forceinline__ bool fixedCells(bool fixed, const BuildInfo& info) {
+/// (The host applies it to its copy of the build info for QueryProfile::fixed_cells.)
+__host__ __device__ __forceinline__ bool fixedCells(bool fixed, const BuildInfo& info) {
   return fixed && info.coord_bits <= kFixedCoordBits;
 }
 
@@ -552,8 +553,9 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
         if (c.L > mine.size_level) ends |= kAboveQueryLevel;
       }
       c.p += P;
-      if (c.p >= rangeCells(c)) {
-        c.p -= rangeCells(c);
+      const std::uint32_t cells = rangeCells(c);
+      if (c.p >= cells) {
+        c.p -= cells;
         startLevel<kSpans>(c, mine, info, fixed, c.L + 1);
       }
     }
