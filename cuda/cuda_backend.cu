@@ -1243,6 +1243,20 @@ __global__ void __launch_bounds__(kQueryBlock)
   }
 }
 
+/// Emits a self query's colliding pair (i, j) as (min, max); with two meshes hashed as one
+/// (split > 0), in its own mesh's indices, with its kind in the two bits above the first index
+/// (bit cat_shift: 0 the first mesh's self pair, 1 the second's, 2 across).
+__device__ __forceinline__ void emitSelfPair(const PairSink& out, std::uint32_t split,
+                                             int cat_shift, std::uint32_t i, std::uint32_t j) {
+  std::uint32_t a = i < j ? i : j, b = i < j ? j : i;
+  if (split > 0 && b >= split) {  // the second mesh's own pair, or one across
+    const std::uint32_t cat = a >= split ? 1u : 2u;
+    a = (cat << cat_shift) | (cat == 1u ? a - split : a);
+    b -= split;
+  }
+  emitPair(out, a, b);
+}
+
 /// Phase 2 of a self query: pairs sharing a vertex (index or coordinates) are adjacent, not
 /// colliding; the others get the exact test. Emits (min, max). With two meshes hashed as one
 /// (split > 0), a pair across them is never adjacent, and its test takes the first mesh's
@@ -1276,15 +1290,8 @@ __global__ void __launch_bounds__(kQueryBlock)
       for (int b = 0; b < 3; ++b) adjacent = adjacent || ti[a] == tj[b] || vi[a] == vj[b];
     adjacent = adjacent && same;
     if (!adjacent &&
-        detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2])) {
-      std::uint32_t a = i < j ? i : j, b = i < j ? j : i;
-      if (split > 0 && b >= split) {  // the second mesh's own pair, or one across
-        const std::uint32_t cat = a >= split ? 1u : 2u;
-        a = (cat << cat_shift) | (cat == 1u ? a - split : a);
-        b -= split;
-      }
-      emitPair(out, a, b);
-    }
+        detail::trianglesIntersectWith<K>(vi[0], vi[1], vi[2], vj[0], vj[1], vj[2]))
+      emitSelfPair(out, split, cat_shift, i, j);
   }
 }
 
@@ -1309,26 +1316,46 @@ __device__ __forceinline__ bool strictlyOneSide(const Vec3<S>* __restrict__ qv,
 
 /// Between phases 1 and 2 (Predicate::Exact only): one thread per candidate drops the pair when
 /// either triangle lies, provably, strictly on one side of the other's plane; the survivors are
-/// appended to `out` (the same (i << 32) | j keys) for the exact kernel. Every dropped pair is one
+/// appended to `surv` (the same (i << 32) | j keys) for the exact kernel. Every dropped pair is one
 /// the exact test rejects, so the result set cannot change; the exact kernel (128 registers, low
-/// occupancy) then runs on several times fewer pairs. Inter queries pass A's mapped vertices as
-/// (va, ta) and B's as (vb, tb); self queries pass the mesh twice. MB: blocks per SM in
-/// __launch_bounds__ (6: at most 40 registers, a few spills; 1: uncapped, ~76 registers).
-template <class S, int MB>
+/// occupancy) then runs on several times fewer pairs. kDecide (KDET_FCL_CUDA_FILTER_DECIDES):
+/// the filter also finishes the test wherever its filters decide it
+/// (detail::trianglesFilterVerdict, the exact test's own answer there), emits the colliding
+/// pairs to `out` as the exact kernel would (self: emitSelfPair), and passes on only the
+/// undecided ones: among them every pair that shares a vertex, so the exact kernel still decides
+/// adjacency. Inter queries pass A's mapped vertices as (va, ta) and B's as (vb, tb); self
+/// queries pass the mesh twice, `self` set. MB: blocks per SM in __launch_bounds__ (6: at most 40
+/// registers, a few spills; 1: uncapped, ~80 registers; 3: the deciding filter's default).
+template <class S, int MB, bool kDecide>
 __global__ void __launch_bounds__(kFilterBlock, MB)
     planeFilterKernel(const unsigned long long* __restrict__ cand,
                       const unsigned long long* count, unsigned long long capacity,
                       const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
                       const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
-                      PairSink out) {
+                      PairSink surv, PairSink out, bool self, std::uint32_t split,
+                      int cat_shift) {
   const unsigned long long m = *count < capacity ? *count : capacity;
   for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
        k += gridDim.x * blockDim.x) {
     const unsigned long long c = cand[k];
     const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-    const bool drop = strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
-                      strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j));
-    if (!drop) emitPair(out, i, j);
+    if constexpr (kDecide) {
+      const std::uint32_t* const p = ta + 3 * std::size_t(i);
+      const std::uint32_t* const q = tb + 3 * std::size_t(j);
+      const detail::FilterVerdict v =
+          detail::trianglesFilterVerdict(va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]]);
+      if (v == detail::FilterVerdict::Intersect) {
+        if (self) emitSelfPair(out, split, cat_shift, i, j);
+        else emitPair(out, i, j);
+      } else if (v == detail::FilterVerdict::Undecided) {
+        emitPair(surv, i, j);
+      }
+    } else {
+      const bool drop =
+          strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
+          strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j));
+      if (!drop) emitPair(surv, i, j);
+    }
   }
 }
 
@@ -2898,25 +2925,35 @@ bool usePlaneFilter(const QueryOptions& options) {
 }
 
 /// Register cap of the plane filter: KDET_FCL_CUDA_FILTER_MINBLOCKS = 6 (at most 40 registers,
-/// ~150 B of spills) or 1 (default: uncapped, ~76 registers). Read at every query. The uncapped
-/// kernel was measured faster (benchmarks/RESULTS-gpu.md, "Optimization round 3").
+/// ~150 B of spills) or 1 (default: uncapped, ~80 registers; the deciding filter at most 80, 3
+/// blocks per SM). Read at every query. The uncapped kernel was measured faster
+/// (benchmarks/RESULTS-gpu.md, "Optimization round 3").
 int filterMinBlocks() {
   return static_cast<int>(detail::choiceKnob("KDET_FCL_CUDA_FILTER_MINBLOCKS", {1, 6}, 1));
 }
 
+/// KDET_FCL_CUDA_FILTER_DECIDES=0: the plane filter only drops pairs, and every other candidate
+/// takes the exact kernel (default 1: the filter also finishes the pairs its filters decide).
+/// Read at every query.
+bool filterDecides() { return detail::switchKnob("KDET_FCL_CUDA_FILTER_DECIDES", true); }
+
 /// Launches the plane filter (grid-stride over the device-side candidate count: 8 blocks of 256
-/// threads per SM).
+/// threads per SM); a self query's pairs (self) go to `out` as selfExactKernel emits them.
 template <class S>
 void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
                        const std::uint32_t* ta, const Vec3<S>* vb, const std::uint32_t* tb,
-                       const PairSink& surv) {
+                       const PairSink& surv, const PairSink& out, bool self, std::uint32_t split,
+                       int cat_shift, bool decides) {
   const auto blocks = static_cast<unsigned int>(8 * g_num_sms);
-  if (filterMinBlocks() == 1)
-    planeFilterKernel<S, 1><<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity,
-                                                            va, ta, vb, tb, surv);
-  else
-    planeFilterKernel<S, 6><<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity,
-                                                            va, ta, vb, tb, surv);
+  const auto run = [&](auto kernel) {
+    kernel<<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity, va, ta, vb, tb,
+                                           surv, out, self, split, cat_shift);
+  };
+  const bool capped = filterMinBlocks() != 1;
+  // The deciding filter, uncapped, took 107 registers (float); at 3 blocks per SM, 80 and no
+  // spills (ptxas -v, sm_90): the dropping-only filter's occupancy.
+  if (decides) run(capped ? planeFilterKernel<S, 6, true> : planeFilterKernel<S, 3, true>);
+  else run(capped ? planeFilterKernel<S, 6, false> : planeFilterKernel<S, 1, false>);
   checkLaunch();
 }
 
@@ -2984,6 +3021,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const auto una = static_cast<std::uint32_t>(na), unb = static_cast<std::uint32_t>(nb);
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
+  const bool decides = filter && filterDecides();
+  ctx.profile.filter_decides = decides;
   const bool spans = spansFor(std::max(A.inter_density, B.inter_density));
   const bool warp = warpScan();
   const bool size_by_level = warp && sizeByLevel();
@@ -3026,7 +3065,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
-      launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, surv);
+      launchPlaneFilter<S>(s, cand, va, av.t, bv.v, bv.t, surv, out, false, 0, 0, decides);
       in = surv;
     }
     ctx.markRound(round.serial, 2);
@@ -3058,6 +3097,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   const auto un = static_cast<std::uint32_t>(n);
   const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
+  const bool decides = filter && filterDecides();
+  ctx.profile.filter_decides = decides;
   const bool spans = spansFor(M.self_density);
   const bool warp = warpScan();
   // (The entry count of the last build that read it back: an estimate after a re-hash.)
@@ -3117,7 +3158,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
-      launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, surv);
+      launchPlaneFilter<S>(s, cand, mv.v, mv.t, mv.v, mv.t, surv, out, true, split, bitsFor(n),
+                           decides);
       in = surv;
     }
     ctx.markRound(round.serial, 2);
@@ -3239,6 +3281,7 @@ void readEveryKnob() {
   (void)upperLevelsFor(0);
   (void)capacityKnob();
   (void)planeFilterOn();
+  (void)filterDecides();
   (void)countOrderAllowed();
   (void)segmentMax();
   (void)roundCandidateLimit(1);

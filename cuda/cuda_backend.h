@@ -31,9 +31,11 @@
 // sets the lanes per query triangle of the candidate search (default 8) and
 // KDET_FCL_CUDA_MINBLOCKS=1|8|12 its register cap (none, 64 or 40 registers; default 8 (64));
 // KDET_FCL_CUDA_PLANE_FILTER=0 turns off the plane filter between the candidate search and the
-// exact tests (default on, Predicate::Exact only; read at every query) and
+// exact tests (default on, Predicate::Exact only; read at every query),
+// KDET_FCL_CUDA_FILTER_DECIDES=0 makes that filter only drop pairs (default: it also finishes
+// the pairs its floating-point filters decide, and only the others take the exact kernel) and
 // KDET_FCL_CUDA_FILTER_MINBLOCKS=6 caps the filter kernel at 40 registers (default uncapped);
-// these three are read at every query; KDET_FCL_CUDA_SYNC_REHASH=1 makes every re-hash read its
+// these are read at every query; KDET_FCL_CUDA_SYNC_REHASH=1 makes every re-hash read its
 // sizes back (the round-3 flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell
 // keys everywhere and KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces
 // its fallback); these three are read at every build, for tests. KDET_FCL_CUDA_SPANS=0|1 forces
@@ -164,7 +166,8 @@ struct QueryProfile {
                           ///< the scan's (0: every round ran both; a self query with cells)
   std::size_t pairs = 0;  ///< pairs found (before max_pairs truncation)
   std::size_t candidates = 0;  ///< candidate pairs of phase 1 (before the plane filter)
-  std::size_t exact_tests = 0;  ///< pairs that reached the exact test (after the plane filter)
+  std::size_t exact_tests = 0;  ///< pairs that reached the exact kernel (after the plane filter;
+                                ///< with filter_decides, only those its filters left undecided)
   int rehashes_async = 0;       ///< device re-hashes without a host read-back
   int builds_with_readback = 0; ///< builds that read the sizes back (first build, new topology,
                                 ///< 128-bit keys, KDET_FCL_CUDA_SYNC_REHASH=1, or a fallback)
@@ -185,6 +188,9 @@ struct QueryProfile {
                              ///< coordinates (KDET_FCL_CUDA_FIXED_CELLS; hashes whose level-0
                              ///< cell coordinates fit in 28 bits, as of their last build read
                              ///< back; the device decides on its own copy of the build info)
+  bool filter_decides = false;  ///< the plane filter finished the pairs its filters decide
+                                ///< (KDET_FCL_CUDA_FILTER_DECIDES; Predicate::Exact with the
+                                ///< filter on)
   bool staged_pairs = false;  ///< the warp-wide phase 1 (warp scan, cells' pairs) emitted its
                               ///< candidates through a warp's stage in shared memory
                               ///< (KDET_FCL_CUDA_STAGE_PAIRS; the tile scan's never are)

@@ -402,6 +402,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_COUNT_ORDER", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", {"1", "256", "65536"}, {"0", "65537", "1k"}},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
+      {"KDET_FCL_CUDA_FILTER_DECIDES", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
       {"KDET_FCL_CUDA_SIZE_BY_LEVEL", on_off, not_on_off},
@@ -866,8 +867,10 @@ TYPED_TEST(CudaQueryTyped, NearCoplanarAndTouchingPairsSurviveThePlaneFilter) {
 }
 
 TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
-  // The filter can be switched off per query (KDET_FCL_CUDA_PLANE_FILTER=0); both ways, and with
-  // tiny buffers (every buffer overflows, the survivors' too), the pairs are the CPU's.
+  // The filter can be switched off per query (KDET_FCL_CUDA_PLANE_FILTER=0), or made to only drop
+  // pairs (KDET_FCL_CUDA_FILTER_DECIDES=0); every way, and with tiny buffers (every buffer
+  // overflows, the survivors' too), the pairs are the CPU's. Deciding, the filter leaves fewer
+  // pairs to the exact kernel than dropping alone.
   KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(80, 4.0, 1.0, 0.03, 1.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 48, 24));
@@ -876,26 +879,50 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   const auto cpu_self = sorted(intersectSelf(cloth).pairs);
   const auto cpu_sheets = sorted(intersectSelf(sheets).pairs);
   ASSERT_GT(cpu_inter.size(), 10u);
-  for (const char* filter : {"0", "1"})
+  struct Mode {
+    const char* filter;
+    const char* decides;
+  };
+  [[maybe_unused]] std::size_t dropping[3] = {0, 0, 0};  // filter 1, decides 0 (run first)
+  for (const Mode mode : {Mode{"0", "1"}, Mode{"1", "0"}, Mode{"1", "1"}}) {
+    [[maybe_unused]] std::size_t exact[3] = {0, 0, 0};  // uncapped: inter, self, sheets
     for (const char* cap : {"", "2", "50"}) {
-      ASSERT_EQ(setenv("KDET_FCL_CUDA_PLANE_FILTER", filter, 1), 0);
-      ASSERT_EQ(setenv("KDET_FCL_CUDA_PAIR_CAPACITY", cap, 1), 0);
-      const std::string what = std::string("filter ") + filter + " cap '" + cap + "'";
+      kdet_test::ScopedEnv f("KDET_FCL_CUDA_PLANE_FILTER", mode.filter),
+          d("KDET_FCL_CUDA_FILTER_DECIDES", mode.decides),
+          c("KDET_FCL_CUDA_PAIR_CAPACITY", cap);
+      const std::string what = std::string("filter ") + mode.filter + " decides " +
+                               mode.decides + " cap '" + cap + "'";
 #if KDET_FCL_TEST_HAVE_CUDA
       cuda::setProfiling(true);
 #endif
       EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs, cpu_inter) << what;
 #if KDET_FCL_TEST_HAVE_CUDA
       const cuda::QueryProfile p = cuda::lastQueryProfile();
-      if (*filter == '0') EXPECT_EQ(p.exact_tests, p.candidates) << what;
+      EXPECT_EQ(p.filter_decides, *mode.filter == '1' && *mode.decides == '1') << what;
+      if (*mode.filter == '0') EXPECT_EQ(p.exact_tests, p.candidates) << what;
       else EXPECT_LT(p.exact_tests, p.candidates) << what;
-      cuda::setProfiling(false);
+      if (*cap == '\0') exact[0] = p.exact_tests;
 #endif
       EXPECT_EQ(intersectSelf(cloth, on(Backend::Cuda)).pairs, cpu_self) << what;
+#if KDET_FCL_TEST_HAVE_CUDA
+      if (*cap == '\0') exact[1] = cuda::lastQueryProfile().exact_tests;
+#endif
       EXPECT_EQ(intersectSelf(sheets, on(Backend::Cuda)).pairs, cpu_sheets) << what;
+#if KDET_FCL_TEST_HAVE_CUDA
+      if (*cap == '\0') exact[2] = cuda::lastQueryProfile().exact_tests;
+      cuda::setProfiling(false);
+#endif
     }
-  unsetenv("KDET_FCL_CUDA_PAIR_CAPACITY");
-  unsetenv("KDET_FCL_CUDA_PLANE_FILTER");
+#if KDET_FCL_TEST_HAVE_CUDA
+    if (*mode.filter == '1' && *mode.decides == '0') std::copy(exact, exact + 3, dropping);
+    if (*mode.filter == '1' && *mode.decides == '1') {
+      // The cloth on the sphere crosses it transversally: its pairs are decided by the filter.
+      EXPECT_LT(exact[0], dropping[0] / 2) << "inter";
+      EXPECT_LE(exact[1], dropping[1]) << "self";
+      EXPECT_LE(exact[2], dropping[2]) << "sheets";
+    }
+#endif
+  }
 }
 
 TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
@@ -1909,16 +1936,26 @@ TEST(CudaQuery, PlaneFilterCountsAndBytesPerTriangle) {
                                   : readMesh<float>(f92));
   cuda::releaseDeviceMemory();
   cuda::setProfiling(true);
+  std::size_t dropping = 0;  // the exact tests when the filter only drops pairs
+  {
+    kdet_test::ScopedEnv d("KDET_FCL_CUDA_FILTER_DECIDES", "0");
+    const QueryResult r = intersectSelf(m, on(Backend::Cuda));
+    dropping = cuda::lastQueryProfile().exact_tests;
+    EXPECT_GE(dropping, r.pairs.size());  // every pair passed the exact kernel
+  }
+  cuda::releaseDeviceMemory();
   const QueryResult r = intersectSelf(m, on(Backend::Cuda));
   const cuda::QueryProfile p = cuda::lastQueryProfile();
   cuda::setProfiling(false);
   EXPECT_EQ(r.pairs, sorted(intersectSelf(m).pairs));
+  EXPECT_TRUE(p.filter_decides);
   EXPECT_LE(p.exact_tests, p.candidates);
-  EXPECT_GE(p.exact_tests, r.pairs.size());
+  EXPECT_LT(p.exact_tests, dropping);
   const double per_tri = double(cuda::deviceBytesInUse()) / double(m.numTriangles());
   std::cout << "[ filter   ] " << (f92.empty() ? "draped cloth" : "cloth_ball92") << ": "
             << m.numTriangles() << " triangles, " << p.candidates << " candidates, "
-            << p.exact_tests << " exact tests, " << r.pairs.size() << " pairs; device "
+            << p.exact_tests << " exact tests (" << dropping
+            << " with KDET_FCL_CUDA_FILTER_DECIDES=0), " << r.pairs.size() << " pairs; device "
             << cuda::deviceBytesInUse() << " B = " << per_tri << " B/triangle\n"
             << "[ memory   ] " << cuda::deviceMemoryReport() << "\n";
 #endif

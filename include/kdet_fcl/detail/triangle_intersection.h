@@ -320,10 +320,10 @@ KDET_HD_INLINE void loneVertex(const int s[3], int& first, bool& negate) {
 /// signs (Guigue and Devillers, "Fast and robust triangle-triangle overlap test using orientation
 /// predicates", J. Graphics Tools 8(1), 2003): the segments overlap iff neither ends before the
 /// other begins along L. Two more predicates instead of the up to eighteen of the edge-by-edge
-/// tests of properProperSigns.
-template <class K>
-KDET_HD_INLINE bool transversalProper(const Vec3<double> P[3], const Vec3<double> Q[3],
-                                      const int sp[3], const int sq[3]) {
+/// tests of properProperSigns. transversalOrder picks the vertices a, b, c of P and d, e, f of Q
+/// by their indices, x[0..5]: the triangles meet iff orient3d(b, d, a, e) <= 0 and
+/// orient3d(a, d, c, f) <= 0.
+KDET_HD_INLINE void transversalOrder(const int sp[3], const int sq[3], int x[6]) {
   int fp = 0, fq = 0;
   bool np = false, nq = false;
   loneVertex(sp, fp, np);
@@ -332,13 +332,30 @@ KDET_HD_INLINE bool transversalProper(const Vec3<double> P[3], const Vec3<double
   if (np) q[1] = 2, q[2] = 1;
   const int s2[3] = {sq[q[0]], sq[q[1]], sq[q[2]]};
   loneVertex(s2, fq, nq);
-  const Vec3<double>& a = P[fp];
-  const Vec3<double>& b = P[(fp + (nq ? 2 : 1)) % 3];  // P reversed when Q's signs must be negated
-  const Vec3<double>& c = P[(fp + (nq ? 1 : 2)) % 3];
-  const Vec3<double>& d = Q[q[fq]];
-  const Vec3<double>& e = Q[q[(fq + 1) % 3]];
-  const Vec3<double>& f = Q[q[(fq + 2) % 3]];
-  return K::orient3d(b, d, a, e) <= 0 && K::orient3d(a, d, c, f) <= 0;
+  x[0] = fp;
+  x[1] = (fp + (nq ? 2 : 1)) % 3;  // P reversed when Q's signs must be negated
+  x[2] = (fp + (nq ? 1 : 2)) % 3;
+  x[3] = q[fq];
+  x[4] = q[(fq + 1) % 3];
+  x[5] = q[(fq + 2) % 3];
+}
+
+/// T[k] (k in 0..2) by selection rather than by indexing, so that on the device the array can
+/// stay in registers.
+template <class T>
+KDET_HD_INLINE Vec3<double> pick(const T t[3], int k) {
+  return toDouble(k == 0 ? t[0] : (k == 1 ? t[1] : t[2]));
+}
+
+/// The test of the comment above, with the orientation signs of kernel K.
+template <class K>
+KDET_HD_INLINE bool transversalProper(const Vec3<double> P[3], const Vec3<double> Q[3],
+                                      const int sp[3], const int sq[3]) {
+  int x[6];
+  transversalOrder(sp, sq, x);
+  const Vec3<double> a = pick(P, x[0]), d = pick(Q, x[3]);
+  return K::orient3d(pick(P, x[1]), d, a, pick(Q, x[4])) <= 0 &&
+         K::orient3d(a, d, pick(P, x[2]), pick(Q, x[5])) <= 0;
 }
 
 /// Any classified shape vs any other; A.kind <= B.kind in the order Point < Segment < Proper is
@@ -411,6 +428,44 @@ struct PlainKernel {
     return sign((T(bx) - T(ax)) * (T(cy) - T(ay)) - (T(by) - T(ay)) * (T(cx) - T(ax)));
   }
 };
+
+/// What the orientation filters alone tell about trianglesIntersect() (the exact test).
+enum class FilterVerdict { Disjoint, Intersect, Undecided };
+
+/// The exact test's answer where its floating-point filters decide it, without any exact
+/// (expansion) arithmetic: Disjoint when either triangle lies provably strictly on one side of
+/// the other's plane; for two triangles whose six vertex signs are all proven non-zero (proper
+/// triangles in different planes), the answer of transversalProper's two orientations where both
+/// are proven; Undecided otherwise. Every decided answer is trianglesIntersect()'s: the filters'
+/// proven signs are the exact ones (orient3dFilterSign), and the test takes the same steps on
+/// them. Triangles that share a vertex (equal coordinates) always give Undecided, since that
+/// vertex's sign against the other's plane is exactly zero and no filter proves a zero. The GPU
+/// uses it to take most candidate pairs out of its exact kernel (cuda_backend.cu).
+template <class S>
+KDET_HD_INLINE FilterVerdict trianglesFilterVerdict(const Vec3<S>& p0, const Vec3<S>& p1,
+                                                    const Vec3<S>& p2, const Vec3<S>& q0,
+                                                    const Vec3<S>& q1, const Vec3<S>& q2) {
+  // The coordinates stay in S (converted exactly where used: fewer registers for float).
+  const Vec3<S> P[3] = {p0, p1, p2}, Q[3] = {q0, q1, q2};
+  int sp[3], sq[3];
+  const OrientPlane qp = orientPlane(toDouble(q0), toDouble(q1), toDouble(q2));
+  for (int i = 0; i < 3; ++i) sp[i] = orient3dFilterSign(qp, toDouble(P[i]));
+  if (tri_isect::strictlyOneSide(sp)) return FilterVerdict::Disjoint;
+  const OrientPlane pp = orientPlane(toDouble(p0), toDouble(p1), toDouble(p2));
+  for (int i = 0; i < 3; ++i) sq[i] = orient3dFilterSign(pp, toDouble(Q[i]));
+  if (tri_isect::strictlyOneSide(sq)) return FilterVerdict::Disjoint;
+  for (int i = 0; i < 3; ++i)
+    if (sp[i] == 0 || sq[i] == 0) return FilterVerdict::Undecided;
+  int x[6];
+  tri_isect::transversalOrder(sp, sq, x);
+  const Vec3<double> a = tri_isect::pick(P, x[0]), d = tri_isect::pick(Q, x[3]);
+  const int o1 = orient3dFilterSign(tri_isect::pick(P, x[1]), d, a, tri_isect::pick(Q, x[4]));
+  if (o1 == 0) return FilterVerdict::Undecided;
+  if (o1 > 0) return FilterVerdict::Disjoint;
+  const int o2 = orient3dFilterSign(a, d, tri_isect::pick(P, x[2]), tri_isect::pick(Q, x[5]));
+  if (o2 == 0) return FilterVerdict::Undecided;
+  return o2 > 0 ? FilterVerdict::Disjoint : FilterVerdict::Intersect;
+}
 
 /// trianglesIntersect() with the orientation signs of kernel K (ExactKernel, PlainKernel<T>).
 template <class K, class S>
