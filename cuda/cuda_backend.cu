@@ -1342,8 +1342,8 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
     if constexpr (kDecide) {
       const std::uint32_t* const p = ta + 3 * std::size_t(i);
       const std::uint32_t* const q = tb + 3 * std::size_t(j);
-      const detail::FilterVerdict v =
-          detail::trianglesFilterVerdict(va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]]);
+      const detail::FilterVerdict v = detail::trianglesFilterVerdict(
+          va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]]);
       if (v == detail::FilterVerdict::Intersect) {
         if (self) emitSelfPair(out, split, cat_shift, i, j);
         else emitPair(out, i, j);

@@ -473,7 +473,8 @@ TEST(TriangleIntersection, RandomDegenerateMatchesMinkowskiReferee) {
 /// The filters decide generic pairs: random triangles in general position (crossing and
 /// disjoint, in float and double), each decided verdict checked against the exact test and the
 /// SAT referee. Pairs that share a vertex are never decided (the GPU's exact kernel then drops
-/// adjacent pairs), nor are the near-touching ones of the test above, which test() checks too.
+/// adjacent pairs). The hand-made, degenerate and near-touching pairs of the tests above have
+/// their decided verdicts checked through test().
 TEST(TriangleIntersection, FilterVerdictDecidesGenericPairsAndAbstainsOnSharedVertices) {
   std::mt19937_64 rng(4);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
