@@ -168,6 +168,55 @@ TEST(Predicates, ExactlyCoplanarAndCollinearAreZero) {
   EXPECT_GT(t3.zero, 3000);
 }
 
+TEST(Predicates, AxisAlignedPlanesAreZeroAndOneUlpOffIsNot) {
+  // Points of an axis-aligned plane (one coordinate shared by all four, or by the three of an
+  // orient2d): the exact zero without an expansion (sameCoordinate). Then the shared coordinate
+  // of the last point moved by one ulp, where the shortcut must not fire and the sign is the
+  // referee's; random doubles and floats at scales from tiny to large, against the referee.
+  std::mt19937_64 rng(8080);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::uniform_int_distribution<int> K(0, 2);
+  Tally zero3, moved3, moved2;
+  for (double sc : {1.0, 1e-30, 1e30, 0x1p-200, 0x1p250}) {
+    for (int it = 0; it < 400; ++it) {
+      const bool floats = it % 2 == 1 && sc < 1e35 && sc > 1e-35;  // inside float's range
+      auto coord = [&] {
+        const double x = U(rng) * sc;
+        return floats ? double(float(x)) : x;  // floats, converted exactly, or doubles
+      };
+      V p[4];
+      for (V& q : p) q = {coord(), coord(), coord()};
+      const int k = K(rng);
+      const double shared = coord();
+      for (V& q : p) q[k] = shared;
+      const int r = refOrient3d(p[0], p[1], p[2], p[3]);
+      ASSERT_EQ(r, 0);
+      zero3.add(orient3dSign(p[0], p[1], p[2], p[3]));
+      checkCase(p[0], p[1], p[2], p[3]);  // every orient2d projection too, one of them collinear
+      if (HasFatalFailure()) return;
+      // One ulp off the plane: not the shortcut's case any more.
+      V d = p[3];
+      d[k] = std::nextafter(d[k], (it & 4) ? INFINITY : -INFINITY);
+      const int rd = refOrient3d(p[0], p[1], p[2], d);
+      moved3.add(rd);
+      ASSERT_EQ(orient3dSign(p[0], p[1], p[2], d), rd) << "it " << it << " sc " << sc;
+      ASSERT_EQ(orient3dSign(orientPlane(p[0], p[1], p[2]), p[0], p[1], p[2], d), rd);
+      // orient2d: three points on a line x = c (or y = c), then the third moved by one ulp.
+      const int j = (k + 1) % 3;
+      const double cx = std::nextafter(p[2][k], (it & 8) ? INFINITY : -INFINITY);
+      ASSERT_EQ(orient2dSign(p[0][k], p[0][j], p[1][k], p[1][j], p[2][k], p[2][j]), 0);
+      ASSERT_EQ(orient2dSign(p[0][j], p[0][k], p[1][j], p[1][k], p[2][j], p[2][k]), 0);
+      const int r2 = refOrient2d(p[0][k], p[0][j], p[1][k], p[1][j], cx, p[2][j]);
+      moved2.add(r2);
+      ASSERT_EQ(orient2dSign(p[0][k], p[0][j], p[1][k], p[1][j], cx, p[2][j]), r2);
+    }
+  }
+  EXPECT_EQ(zero3.zero, 2000);
+  EXPECT_GT(moved3.pos, 500);
+  EXPECT_GT(moved3.neg, 500);
+  EXPECT_GT(moved2.pos + moved2.neg, 1500);
+}
+
 TEST(Predicates, OneUlpPerturbationsMatchReferee) {
   // Exactly coplanar points with one coordinate moved by one ulp up or down: the true sign is
   // nonzero (usually) but far below what the double evaluation can resolve.

@@ -245,6 +245,9 @@ KDET_HD_INLINE int orient2dSign(double ax, double ay, double bx, double by, doub
     if (det > bound) return 1;
     if (-det > bound) return -1;
   }
+  // Three points equal in one coordinate: each product has a zero factor, the value is exactly 0
+  // (as for the projections of a triangle in an axis-aligned plane), with no expansion.
+  if ((ax == bx && bx == cx) || (ay == by && by == cy)) return 0;
   return exact::orient2dSignExact(ax, ay, bx, by, cx, cy);
 }
 
@@ -318,13 +321,24 @@ KDET_HD_INLINE int orient3dFilterSign(const OrientPlane& p, const Vec3<double>& 
   return exact::orient3dFilterVerdict(det, permanent);
 }
 
+/// Whether the four points are equal in one coordinate: then that column of det[b-a; c-a; d-a] is
+/// zero and the determinant exactly 0. Checked where the filter cannot tell, before any expansion:
+/// points of an axis-aligned plane (a cloth lying on a floor) are where exact zeros come from in
+/// practice (every one of the cloth ball's undecided candidate pairs, benchmarks/RESULTS-gpu.md).
+KDET_HD_INLINE bool sameCoordinate(const Vec3<double>& a, const Vec3<double>& b,
+                                   const Vec3<double>& c, const Vec3<double>& d) {
+  return (a.x == b.x && b.x == c.x && c.x == d.x) || (a.y == b.y && b.y == c.y && c.y == d.y) ||
+         (a.z == b.z && b.z == c.z && c.z == d.z);
+}
+
 /// The exact sign (-1, 0, +1) of det[b-a; c-a; d-a] (rows) = dot(cross(b-a, c-a), d-a): positive
 /// when d lies on the side of the plane (a, b, c) that cross(b-a, c-a) points to. Exact inside the
 /// validity range documented at the top of this file.
 KDET_HD_INLINE int orient3dSign(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
                                 const Vec3<double>& d) {
   const int s = orient3dFilterSign(a, b, c, d);
-  return s != 0 ? s : exact::orient3dSignExact(a, b, c, d);
+  if (s != 0) return s;
+  return sameCoordinate(a, b, c, d) ? 0 : exact::orient3dSignExact(a, b, c, d);
 }
 
 /// orient3dSign(a, b, c, d) with the plane of (a, b, c) prepared by orientPlane(a, b, c): the same
@@ -333,7 +347,8 @@ KDET_HD_INLINE int orient3dSign(const OrientPlane& plane, const Vec3<double>& a,
                                 const Vec3<double>& b, const Vec3<double>& c,
                                 const Vec3<double>& d) {
   const int s = orient3dFilterSign(plane, d);
-  return s != 0 ? s : exact::orient3dSignExact(a, b, c, d);
+  if (s != 0) return s;
+  return sameCoordinate(a, b, c, d) ? 0 : exact::orient3dSignExact(a, b, c, d);
 }
 
 }  // namespace detail
