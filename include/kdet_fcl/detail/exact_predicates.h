@@ -331,14 +331,20 @@ KDET_HD_INLINE bool sameCoordinate(const Vec3<double>& a, const Vec3<double>& b,
          (a.z == b.z && b.z == c.z && c.z == d.z);
 }
 
+/// The exact sign of det[b-a; c-a; d-a] where a filter could not prove it: 0 for four points
+/// equal in one coordinate, else by the expansion.
+KDET_HD_INLINE int orient3dSignUnfiltered(const Vec3<double>& a, const Vec3<double>& b,
+                                          const Vec3<double>& c, const Vec3<double>& d) {
+  return sameCoordinate(a, b, c, d) ? 0 : exact::orient3dSignExact(a, b, c, d);
+}
+
 /// The exact sign (-1, 0, +1) of det[b-a; c-a; d-a] (rows) = dot(cross(b-a, c-a), d-a): positive
 /// when d lies on the side of the plane (a, b, c) that cross(b-a, c-a) points to. Exact inside the
 /// validity range documented at the top of this file.
 KDET_HD_INLINE int orient3dSign(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& c,
                                 const Vec3<double>& d) {
   const int s = orient3dFilterSign(a, b, c, d);
-  if (s != 0) return s;
-  return sameCoordinate(a, b, c, d) ? 0 : exact::orient3dSignExact(a, b, c, d);
+  return s != 0 ? s : orient3dSignUnfiltered(a, b, c, d);
 }
 
 /// orient3dSign(a, b, c, d) with the plane of (a, b, c) prepared by orientPlane(a, b, c): the same
@@ -347,8 +353,7 @@ KDET_HD_INLINE int orient3dSign(const OrientPlane& plane, const Vec3<double>& a,
                                 const Vec3<double>& b, const Vec3<double>& c,
                                 const Vec3<double>& d) {
   const int s = orient3dFilterSign(plane, d);
-  if (s != 0) return s;
-  return sameCoordinate(a, b, c, d) ? 0 : exact::orient3dSignExact(a, b, c, d);
+  return s != 0 ? s : orient3dSignUnfiltered(a, b, c, d);
 }
 
 }  // namespace detail
