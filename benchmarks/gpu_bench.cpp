@@ -2,7 +2,8 @@
 // (gpu_bvh.cu), the CPU backend and FCL 0.7, per frame, in one run.
 //
 //   gpu_bench [--data DIR] [--repeats N] [--only SUBSTR]... [--no-fcl] [--no-cpu] [--quick]
-//             [--big] [--joint deforming|all|none] [--csv FILE] [--json FILE] [--md FILE]
+//             [--big] [--joint deforming|all|none] [--fresh-results] [--csv FILE]
+//             [--json FILE] [--md FILE]
 //
 // DIR holds unc/{cloth-ball,cloth-funnel,n-body-simulation} (default: $KDET_FCL_DATA_DIR, else
 // ../shared/data beside the source tree); scenes whose files are missing are skipped.
@@ -29,11 +30,17 @@
 // The CSV's `kdet_counted_share` column: of kDet GPU's profiled queries of the scene (kept self
 // results left out), the share whose pairs were put in order by counting (1) rather than by the
 // radix sort (0): QueryProfile::pairs_counted, KDET_FCL_CUDA_COUNT_ORDER.
+// Results kept from frame to frame (default): each GPU method writes a frame's pairs into the
+// results of the frame before, as a simulation does (kDet: intersectSelf/intersectMeshes/
+// intersectAll into a result; the LBVH: its `keep` argument), so both read their pairs back into
+// storage that is there already, by several host threads where that pays
+// (kdet_fcl::staging::downloadInto). --fresh-results: the by-value calls, a new result per query
+// (the runs before 2026-11-24). The CPU methods and FCL are unchanged.
 // Device memory: cuda::deviceBytesInUse() after kDet GPU's first frame of a scene (one frame's
 // meshes resident, plus the backend's scratch), divided by the scene's triangles ("B/tri").
 // Per frame, each method does what a new frame costs it:
 //   - kDet GPU: markDeformed on the deforming meshes, then the queries (vertex upload, device
-//     re-hash, search, exact tests, sort, copy into std::vector);
+//     re-hash, search, exact tests, sort, copy into the kept result's std::vector);
 //   - LBVH GPU: vertex upload + refit of the deforming meshes' trees (tree built once, at frame
 //     0), traversal, exact tests, sort, copy; also measured with a full rebuild per frame;
 //   - kDet CPU (2 and 16 threads): HashedMesh::updateVertices (re-hash) + the queries;
@@ -198,6 +205,7 @@ struct Config {
   int repeats = 10;
   bool fcl = true, cpu = true, quick = false, big = false;
   std::string joint = "deforming";  // --joint: deforming | all | none
+  bool fresh = false;  // --fresh-results: the by-value queries (a new result every frame)
   std::vector<std::string> only;
 };
 
@@ -233,6 +241,11 @@ Row runScene(const BScene& sc, const Config& cfg) {
     return *hm[o][std::min<std::size_t>(f, hm[o].size() - 1)];
   };
   std::size_t queries_profiled = 0, queries_counted = 0;  // (Row::kdet_counted)
+  // The results kept from frame to frame (cfg.fresh: unused), one per query of a frame, in the
+  // order the frame runs them; kDet's and the LBVH's alike.
+  std::vector<QueryResult> kept_q(sc.self.size() + sc.inter.size());
+  AllPairsResult kept_all;
+  std::vector<Pairs> bvh_kept(sc.self.size() + sc.inter.size() + 1);
   // on_dev: the queries leave their pairs in that device buffer (intersect*OnDevice; grown and
   // asked again when they do not fit); sets then gets them read back.
   auto kdetGpuFrame = [&](int f, std::vector<Pairs>* sets, cuda::QueryProfile* prof,
@@ -255,9 +268,9 @@ Row runScene(const BScene& sc, const Config& cfg) {
       prof->candidates += p.candidates;
       prof->rounds = std::max(prof->rounds, p.rounds);
     };
-    auto take = [&](QueryResult q) {
+    auto take = [&](const QueryResult& q) {
       n += q.pairs.size();
-      if (sets) sets->push_back(std::move(q.pairs));
+      if (sets) sets->push_back(q.pairs);
     };
     // After a joint call: when the backend ran the three queries instead (e.g.
     // KDET_FCL_CUDA_JOINT=0), the profile is the last one's only; warns once (--joint none times
@@ -319,21 +332,29 @@ Row runScene(const BScene& sc, const Config& cfg) {
       return n;
     }
     if (joint) {
-      AllPairsResult all = intersectAll(H(0, f), H(1, f), opts(Backend::Cuda));
+      if (cfg.fresh) kept_all = intersectAll(H(0, f), H(1, f), opts(Backend::Cuda));
+      else intersectAll(H(0, f), H(1, f), kept_all, opts(Backend::Cuda));
       profiled();
       static bool host_warned = false;
       warnIfNotJoint("intersectAll", host_warned);
-      take(std::move(all.self_a));
-      take(std::move(all.self_b));
-      take(std::move(all.inter));
+      take(kept_all.self_a);
+      take(kept_all.self_b);
+      take(kept_all.inter);
       return n;
     }
+    std::size_t q = 0;
     for (int o : sc.self) {
-      take(intersectSelf(H(o, f), opts(Backend::Cuda)));
+      QueryResult& k = kept_q[q++];
+      if (cfg.fresh) k = intersectSelf(H(o, f), opts(Backend::Cuda));
+      else intersectSelf(H(o, f), k, opts(Backend::Cuda));
+      take(k);
       profiled();
     }
     for (auto [a, b] : sc.inter) {
-      take(intersectMeshes(H(a, f), H(b, f), opts(Backend::Cuda)));
+      QueryResult& k = kept_q[q++];
+      if (cfg.fresh) k = intersectMeshes(H(a, f), H(b, f), opts(Backend::Cuda));
+      else intersectMeshes(H(a, f), H(b, f), k, opts(Backend::Cuda));
+      take(k);
       profiled();
     }
     return n;
@@ -358,7 +379,9 @@ Row runScene(const BScene& sc, const Config& cfg) {
       const auto& v = joint_frames[f].vertices;
       if (rebuild) bv[0]->rebuildVertices(v);
       else bv[0]->updateVertices(v);
-      Pairs all = kdet_bvh::intersectSelf(*bv[0], Predicate::Exact, split);
+      Pairs& all = bvh_kept.back();
+      all = kdet_bvh::intersectSelf(*bv[0], Predicate::Exact, split,
+                                    cfg.fresh ? nullptr : &all);
       const std::size_t n = all.size();
       if (sets)
         for (Pairs& p : kdet_bvh::splitJoint(all, split)) sets->push_back(std::move(p));
@@ -369,14 +392,22 @@ Row runScene(const BScene& sc, const Config& cfg) {
         if (rebuild) bv[o]->rebuildVertices(sc.mesh(o, f).vertices);
         else bv[o]->updateVertices(sc.mesh(o, f).vertices);
       }
-    std::size_t n = 0;
-    auto take = [&](Pairs p) {
+    std::size_t n = 0, q = 0;
+    auto take = [&](Pairs& p) {
       n += p.size();
-      if (sets) sets->push_back(std::move(p));
+      if (sets) sets->push_back(p);
     };
     const Transform<float> I = Transform<float>::identity();
-    for (int o : sc.self) take(kdet_bvh::intersectSelf(*bv[o]));
-    for (auto [a, b] : sc.inter) take(kdet_bvh::intersect(*bv[a], I, *bv[b], I));
+    for (int o : sc.self) {
+      Pairs& k = bvh_kept[q++];
+      k = kdet_bvh::intersectSelf(*bv[o], Predicate::Exact, 0, cfg.fresh ? nullptr : &k);
+      take(k);
+    }
+    for (auto [a, b] : sc.inter) {
+      Pairs& k = bvh_kept[q++];
+      k = kdet_bvh::intersect(*bv[a], I, *bv[b], I, Predicate::Exact, cfg.fresh ? nullptr : &k);
+      take(k);
+    }
     return n;
   };
 
@@ -771,6 +802,7 @@ int main(int argc, char** argv) {
     else if (a == "--no-cpu") cfg.cpu = false;
     else if (a == "--quick") cfg.quick = true;
     else if (a == "--big") cfg.big = true;
+    else if (a == "--fresh-results") cfg.fresh = true;
     else if (a == "--joint" && i + 1 < argc) {
       cfg.joint = argv[++i];
       if (cfg.joint != "deforming" && cfg.joint != "all" && cfg.joint != "none") {
@@ -785,8 +817,8 @@ int main(int argc, char** argv) {
     else {
       std::fprintf(stderr,
                    "usage: gpu_bench [--data DIR] [--repeats N] [--only SUBSTR]... [--no-fcl] "
-                   "[--no-cpu] [--quick] [--big] [--joint deforming|all|none] [--csv FILE] "
-                   "[--json FILE] [--md FILE]\n");
+                   "[--no-cpu] [--quick] [--big] [--joint deforming|all|none] "
+                   "[--fresh-results] [--csv FILE] [--json FILE] [--md FILE]\n");
       return 2;
     }
   }

@@ -121,6 +121,7 @@ struct Scratch {
   Buf<uint2> unpacked;
   Buf<unsigned char> cub, mapped;
   Pinned host_counters, host_pairs;
+  kdet_fcl::staging::CopyPool copy_pool;  // the threads of reads into kept results (downloadInto)
   std::size_t cand_cap = 0, pair_cap = 0, forced_cap = 0;
   int sms = 0;
   std::size_t bytes() const {
@@ -710,7 +711,7 @@ namespace {
 /// Runs traverse() then exact() until neither buffer overflowed, then sorts and copies the pairs.
 template <class Traverse, class Exact>
 std::vector<TrianglePair> runQuery(std::size_t n_hint, int a_bits, Traverse traverse,
-                                   Exact exact) {
+                                   Exact exact, std::vector<TrianglePair>* keep) {
   Scratch& s = scratch();
   if (s.cand_cap == 0) {
     s.cand_cap = std::max<std::size_t>(1 << 16, 4 * n_hint);
@@ -745,6 +746,8 @@ std::vector<TrianglePair> runQuery(std::size_t n_hint, int a_bits, Traverse trav
     s.pair_cap = std::max<std::size_t>(s.pair_cap, np + np / 4);
   }
   std::vector<TrianglePair> out;
+  if (keep != nullptr) out = std::move(*keep);  // the caller's storage (its pairs replaced)
+  if (np == 0) out.clear();
   if (np > 0) {
     s.sorted.reserve(np);
     s.unpacked.reserve(np);
@@ -760,10 +763,16 @@ std::vector<TrianglePair> runQuery(std::size_t n_hint, int a_bits, Traverse trav
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair layout");
     // The backend's read-back (cuda/staged_upload.h), so both pay the same transfer.
     auto* h = static_cast<TrianglePair*>(s.host_pairs.reserve(np * sizeof(uint2)));
-    out.reserve(np);
-    BVH_TRY(kdet_fcl::staging::stagedDownload(
-        reinterpret_cast<const TrianglePair*>(s.unpacked.p), np, h, 0,
-        [&](const TrianglePair* first, std::size_t k) { out.insert(out.end(), first, first + k); }));
+    const auto* from = reinterpret_cast<const TrianglePair*>(s.unpacked.p);
+    if (keep != nullptr) {  // into kept storage, as the backend's results kept across frames
+      BVH_TRY(kdet_fcl::staging::downloadInto(from, np, h, 0, s.copy_pool, out));
+    } else {
+      out.reserve(np);
+      BVH_TRY(kdet_fcl::staging::stagedDownload(from, np, h, 0,
+                                                [&](const TrianglePair* first, std::size_t k) {
+                                                  out.insert(out.end(), first, first + k);
+                                                }));
+    }
   }
   g_timer.mark(&g_timer.t.output_ms);
   return out;
@@ -792,7 +801,7 @@ void withKernel(Predicate p, F&& f) {
 template <class S>
 std::vector<TrianglePair> intersect(GpuBvh<S>& A, const kdet_fcl::Transform<S>& pose_a,
                                     GpuBvh<S>& B, const kdet_fcl::Transform<S>& pose_b,
-                                    Predicate predicate) {
+                                    Predicate predicate, std::vector<TrianglePair>* keep) {
   auto& a = A.impl();
   auto& b = B.impl();
   if (a.n == 0 || b.n == 0) return {};
@@ -829,20 +838,23 @@ std::vector<TrianglePair> intersect(GpuBvh<S>& A, const kdet_fcl::Transform<S>& 
           interExactKernel<S, K><<<exactGrid(cap), kBlock>>>(cand, count, cap, va, a.t.p, b.v.p,
                                                              b.t.p, out_sink);
           BVH_LAUNCHED();
-        });
+        },
+        keep);
   });
   g_timer.end();
   return out;
 }
 
 template <class S>
-std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate, std::uint32_t split) {
+std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate, std::uint32_t split,
+                                        std::vector<TrianglePair>* keep) {
   auto& m = M.impl();
   if (m.n < 2) return {};
   kdet_fcl::QueryOptions options;
   options.predicate = predicate;
   kdet_fcl::detail::KeptSelfResult::Ticket ticket;
   kdet_fcl::QueryResult kept;
+  if (keep != nullptr) kept.pairs = std::move(*keep);  // (a kept result is copied into it)
   // (A kept result is of the tree as one mesh: split queries neither use nor keep one.)
   if (split == 0 && m.kept_self.find(m.geometry, options, &kept, &ticket))
     return std::move(kept.pairs);
@@ -861,7 +873,8 @@ std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate, std::
           selfExactKernel<S, K><<<exactGrid(cap), kBlock>>>(cand, count, cap, m.v.p, m.t.p,
                                                             split, out_sink);
           BVH_LAUNCHED();
-        });
+        },
+        keep != nullptr ? &kept.pairs : nullptr);
   });
   g_timer.end();
   if (split == 0 && ticket.keep) {
@@ -876,8 +889,9 @@ std::vector<TrianglePair> intersectSelf(GpuBvh<S>& M, Predicate predicate, std::
   template class GpuBvh<S>;                                                                  \
   template std::vector<TrianglePair> intersect<S>(GpuBvh<S>&, const kdet_fcl::Transform<S>&, \
                                                   GpuBvh<S>&, const kdet_fcl::Transform<S>&, \
-                                                  Predicate);                                \
-  template std::vector<TrianglePair> intersectSelf<S>(GpuBvh<S>&, Predicate, std::uint32_t);
+                                                  Predicate, std::vector<TrianglePair>*);    \
+  template std::vector<TrianglePair> intersectSelf<S>(GpuBvh<S>&, Predicate, std::uint32_t,  \
+                                                      std::vector<TrianglePair>*);
 KDET_BVH_INSTANTIATE(float)
 KDET_BVH_INSTANTIATE(double)
 

@@ -111,24 +111,30 @@ class GpuBvh {
 };
 
 /// Every pair (i of a, j of b) of intersecting closed triangles, decided on a's vertices mapped
-/// into b's frame (as kdet_fcl::intersectMeshes). Sorted by (a, b).
+/// into b's frame (as kdet_fcl::intersectMeshes). Sorted by (a, b). With `keep` (a result the
+/// caller keeps across frames), the pairs are read back into its storage, which the returned
+/// vector then holds, as the backend reads them into a result kept across frames
+/// (kdet_fcl::staging::downloadInto: several threads where that pays).
 template <class S>
 std::vector<kdet_fcl::TrianglePair> intersect(GpuBvh<S>& a, const kdet_fcl::Transform<S>& pose_a,
                                               GpuBvh<S>& b, const kdet_fcl::Transform<S>& pose_b,
                                               kdet_fcl::Predicate predicate =
-                                                  kdet_fcl::Predicate::Exact);
+                                                  kdet_fcl::Predicate::Exact,
+                                              std::vector<kdet_fcl::TrianglePair>* keep = nullptr);
 
 /// Every pair (i < j) of intersecting triangles of one mesh, except pairs sharing a vertex (index
 /// or coordinates), as kdet_fcl::intersectSelf. Sorted by (a, b). With split > 0 the tree holds
 /// two meshes (triangles [0, split) are the first's; the benchmark's joint form of two deforming
 /// meshes, as kdet_fcl::intersectAll on the GPU): a pair across them is never adjacent and is
 /// decided as intersect() decides it, so the result is both self queries' and the inter query's
-/// pairs in one list (split it with splitJoint).
+/// pairs in one list (split it with splitJoint). `keep` as intersect()'s.
 template <class S>
 std::vector<kdet_fcl::TrianglePair> intersectSelf(GpuBvh<S>& mesh,
                                                   kdet_fcl::Predicate predicate =
                                                       kdet_fcl::Predicate::Exact,
-                                                  std::uint32_t split = 0);
+                                                  std::uint32_t split = 0,
+                                                  std::vector<kdet_fcl::TrianglePair>* keep =
+                                                      nullptr);
 
 /// The two meshes as one (the second's vertices after the first's, its vertex indices shifted),
 /// for intersectSelf with split = a.triangles.size().

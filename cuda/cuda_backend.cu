@@ -1634,6 +1634,7 @@ struct Context {
   PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + 2 kind counts + the
                             // kPairCountWords counters of the last pass
   PinnedBuffer readback;    // sorted pairs on their way into the result
+  staging::CopyPool copy_pool;  // the threads of pooled read-backs (results kept by the caller)
 
   std::list<CachedMesh<float>> meshes_f;
   std::list<CachedMesh<double>> meshes_d;
@@ -2476,12 +2477,17 @@ struct DeviceOut {
 /// separate queries give them. With `dev` (instead of `parts`), the ordered pairs are delivered
 /// straight into the caller's device buffer, as many as fit, dev->count gets how many there were
 /// (and dev->kinds, with split, the pairs of kinds 1 and 2), nothing else is read back, and the
-/// call returns once the stream is done.
+/// call returns once the stream is done. With `keep` (a result the caller keeps across frames:
+/// its storage, moved into the returned result's pairs), or with `parts` that hold pairs, the
+/// pairs are read back into that storage: by several threads where staging::pooledThreads allows
+/// (enough pairs, and at least half as many there already; staging::downloadInto,
+/// pooledDownload).
 template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
                      std::size_t work, double density, double first_share, bool stages,
                      const QueryOptions& options, std::uint32_t split = 0,
-                     QueryResult* parts = nullptr, DeviceOut* dev = nullptr) {
+                     QueryResult* parts = nullptr, DeviceOut* dev = nullptr,
+                     std::vector<TrianglePair>* keep = nullptr) {
   const cudaStream_t s = ctx.stream;
   ctx.cands.reserve(std::max<std::size_t>(std::size_t(1) << 16, 8 * work));
   ctx.pairs.reserve(std::max<std::size_t>(std::size_t(1) << 16, work));
@@ -2587,6 +2593,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   }
   ctx.record(2);
   QueryResult res;
+  if (keep != nullptr) res.pairs = std::move(*keep);  // (its old pairs: replaced below)
   std::size_t m = n;
   if (options.max_pairs > 0 && m > options.max_pairs) m = options.max_pairs;
   // The pairs to deliver: all m to the host, or to the caller's device buffer as many as fit.
@@ -2644,40 +2651,82 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                                cudaMemcpyDeviceToHost, s));
     if (dev == nullptr) {
       // Through pinned memory (a pageable device->host copy runs at a fraction of the bus rate),
-      // in chunks, each appended to the result as soon as it has arrived (staged_upload.h).
+      // in chunks, each appended to the result as soon as it has arrived (staged_upload.h), or,
+      // into storage the caller keeps, copied by several threads where that pays.
       ctx.readback.reserve(m * sizeof(TrianglePair));
       auto* const from = reinterpret_cast<const TrianglePair*>(in);
       auto* const stage = static_cast<TrianglePair*>(ctx.readback.data());
-      if (parts == nullptr) {
+      if (parts == nullptr && keep != nullptr) {
+        CUDA_TRY(staging::downloadInto(from, m, stage, s, ctx.copy_pool, res.pairs));
+      } else if (parts == nullptr) {
         res.pairs.reserve(m);
         CUDA_TRY(staging::stagedDownload(from, m, stage, s,
                                          [&](const TrianglePair* first, std::size_t k) {
                                            res.pairs.insert(res.pairs.end(), first, first + k);
                                          }));
       } else {
-        std::size_t at = 0, end0 = 0, end1 = 0;  // the next pair's index; the runs' ends
-        CUDA_TRY(staging::stagedDownload(from, m, stage, s, [&](const TrianglePair* first,
-                                                                std::size_t k) {
-          if (at == 0) {  // the counts arrived before the first chunk
-            const std::size_t k1 = ctx.hostKinds()[0], k2 = ctx.hostKinds()[1];
-            end1 = m - std::min<std::size_t>(m, k2);
-            end0 = end1 - std::min<std::size_t>(end1, k1);
-            parts[0].pairs.reserve(end0);
-            parts[1].pairs.reserve(end1 - end0);
-            parts[2].pairs.reserve(m - end1);
-          }
+        // The three runs' ends (the kind counts arrived before the first chunk).
+        std::size_t end0 = 0, end1 = 0;
+        auto runs = [&] {
+          const std::size_t k1 = ctx.hostKinds()[0], k2 = ctx.hostKinds()[1];
+          end1 = m - std::min<std::size_t>(m, k2);
+          end0 = end1 - std::min<std::size_t>(end1, k1);
+        };
+        // Pairs [at, at + k) of the runs, at `first`, to their parts by `put(kind, offset in
+        // the part, first, count)`.
+        auto deal = [&](std::size_t at, const TrianglePair* first, std::size_t k, auto&& put) {
           for (std::size_t e = 0; e < k;) {
             const std::size_t i = at + e;
             const int kind = i < end0 ? 0 : i < end1 ? 1 : 2;
             const std::size_t stop =
                 std::min(k, (kind == 0 ? end0 : kind == 1 ? end1 : m) - at);
-            parts[kind].pairs.insert(parts[kind].pairs.end(), first + e, first + stop);
+            put(kind, i - (kind == 0 ? 0 : kind == 1 ? end0 : end1), first + e, stop - e);
             e = stop;
           }
-          at += k;
-        }));
+        };
+        const int threads = staging::pooledThreads(
+            m, parts[0].pairs.size() + parts[1].pairs.size() + parts[2].pairs.size());
+        if (threads > 0) {
+          CUDA_TRY(staging::pooledDownload(
+              from, m, stage, s, ctx.copy_pool, threads,
+              [&] {
+                runs();
+                parts[0].pairs.resize(end0);
+                parts[1].pairs.resize(end1 - end0);
+                parts[2].pairs.resize(m - end1);
+              },
+              [&](std::size_t at, const TrianglePair* first, std::size_t k) {
+                deal(at, first, k,
+                     [&](int kind, std::size_t off, const TrianglePair* p, std::size_t c) {
+                       std::memcpy(static_cast<void*>(parts[kind].pairs.data() + off), p,
+                                   c * sizeof(TrianglePair));
+                     });
+              }));
+        } else {
+          std::size_t at = 0;  // the next pair's index
+          CUDA_TRY(staging::stagedDownload(from, m, stage, s, [&](const TrianglePair* first,
+                                                                  std::size_t k) {
+            if (at == 0) {
+              runs();
+              for (int kind = 0; kind < 3; ++kind) parts[kind].pairs.clear();
+              parts[0].pairs.reserve(end0);
+              parts[1].pairs.reserve(end1 - end0);
+              parts[2].pairs.reserve(m - end1);
+            }
+            deal(at, first, k,
+                 [&](int kind, std::size_t, const TrianglePair* p, std::size_t c) {
+                   parts[kind].pairs.insert(parts[kind].pairs.end(), p, p + c);
+                 });
+            at += k;
+          }));
+        }
       }
     }
+  }
+  if (dev == nullptr && m == 0) {  // (kept storage: no old pair stays)
+    res.pairs.clear();
+    if (parts != nullptr)
+      for (int kind = 0; kind < 3; ++kind) parts[kind].pairs.clear();
   }
   ctx.record(3);
   // The caller's device buffer is filled when the call returns (its reader may use any stream).
@@ -2992,7 +3041,8 @@ struct PendingBuilds {
 
 template <class S>
 QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
-                      const QueryOptions& options, DeviceOut* dev = nullptr) {
+                      const QueryOptions& options, DeviceOut* dev = nullptr,
+                      std::vector<TrianglePair>* keep = nullptr) {
   const std::size_t na = a.numTriangles(), nb = b.numTriangles();
   ctx.profile = QueryProfile{};
   if (na == 0 || nb == 0) return QueryResult{};
@@ -3080,7 +3130,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
                            {sourceOf(&a), sourceOf(&b)}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,
                              std::max(A.inter_density, B.inter_density), 0.0, false, options, 0,
-                             nullptr, dev);
+                             nullptr, dev, keep);
   A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
   return res;
 }
@@ -3090,7 +3140,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
 template <class S>
 QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
                       std::uint32_t split, QueryResult* parts, const QueryOptions& options,
-                      DeviceOut* dev = nullptr) {
+                      DeviceOut* dev = nullptr, std::vector<TrianglePair>* keep = nullptr) {
   const std::size_t n = M.nt;
   ctx.record(1);
   const cudaStream_t s = ctx.stream;
@@ -3172,7 +3222,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   };
   PendingBuilds<S> pending{ctx, {&M, nullptr}, {src, MeshSource<S>{}}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, M.self_density,
-                             M.self_cell_share, cell_pairs, options, split, parts, dev);
+                             M.self_cell_share, cell_pairs, options, split, parts, dev, keep);
   M.self_density = double(ctx.profile.candidates) / double(n);
   M.self_cell_share = ctx.profile.candidates > 0 ? double(ctx.profile.cell_candidates) /
                                                        double(ctx.profile.candidates)
@@ -3191,9 +3241,11 @@ void copyToDevice(Context& ctx, const std::vector<TrianglePair>& pairs, DeviceOu
   CUDA_TRY(cudaStreamSynchronize(ctx.stream));
 }
 
+/// The self query (`keep`: storage for the pairs that the caller keeps across frames, as
+/// runQuery's).
 template <class S>
 QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions& options,
-                     DeviceOut* dev = nullptr) {
+                     DeviceOut* dev = nullptr, std::vector<TrianglePair>* keep = nullptr) {
   const std::size_t n = mesh.numTriangles();
   ctx.profile = QueryProfile{};
   if (n < 2) return QueryResult{};
@@ -3204,6 +3256,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   // there; any other runs straight into the buffer.
   detail::KeptSelfResult::Ticket ticket;
   QueryResult kept;
+  if (keep != nullptr) kept.pairs = std::move(*keep);  // (a kept result is copied into it)
   if (M.kept_self.find(M.builds, options, &kept, &ticket)) {
     ctx.profile = QueryProfile{};  // nothing ran on the device but this copy
     ctx.profile.self_cached = true;
@@ -3213,7 +3266,8 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
   }
   if (dev != nullptr && !ticket.keep)
     return selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options, dev);
-  QueryResult res = selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options);
+  QueryResult res = selfQuery(ctx, M, sourceOf(&mesh), 0, nullptr, options, nullptr,
+                              keep != nullptr ? &kept.pairs : nullptr);
   M.kept_self.offer(ticket, options, res);
   if (dev != nullptr) copyToDevice(ctx, res.pairs, dev);
   return res;
@@ -3233,17 +3287,16 @@ void jointQuery(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
   ctx.profile.joint = true;
 }
 
-/// intersectAll with both meshes hashed as one (see cuda::intersectJoint).
+/// intersectAll with both meshes hashed as one (see cuda::intersectJoint), into `out`, whose
+/// pairs' storage is reused (runQuery's parts).
 template <class S>
-AllPairsResult jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
-                         const QueryOptions& options) {
+void jointImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
+               const QueryOptions& options, AllPairsResult* out) {
+  QueryResult* const results[3] = {&out->self_a, &out->self_b, &out->inter};
   QueryResult parts[3];
+  for (int k = 0; k < 3; ++k) parts[k].pairs = std::move(results[k]->pairs);
   jointQuery(ctx, a, b, options, parts, nullptr);
-  AllPairsResult r;
-  r.self_a = std::move(parts[0]);
-  r.self_b = std::move(parts[1]);
-  r.inter = std::move(parts[2]);
-  return r;
+  for (int k = 0; k < 3; ++k) *results[k] = std::move(parts[k]);
 }
 
 /// jointImpl with the pairs left in the caller's device buffer: the first mesh's own pairs, then
@@ -3304,6 +3357,7 @@ void readEveryKnob() {
   (void)staging::uploadChunk();
   (void)staging::downloadChunk();
   (void)staging::uploadThreads(1);
+  (void)staging::downloadThreads(1);
 }
 
 /// Serialises, initialises, and on a CUDA error drops every device buffer before rethrowing.
@@ -3392,6 +3446,17 @@ QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options
 }
 
 template <class S>
+void intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                     const QueryOptions& options, QueryResult& out) {
+  out = guarded([&](Context& ctx) { return interImpl(ctx, a, b, options, nullptr, &out.pairs); });
+}
+
+template <class S>
+void intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options, QueryResult& out) {
+  out = guarded([&](Context& ctx) { return selfImpl(ctx, mesh, options, nullptr, &out.pairs); });
+}
+
+template <class S>
 DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, const QueryOptions& options,
                                         TrianglePair* out, std::size_t capacity) {
   return onDevice(out, capacity, [&](Context& ctx, DeviceOut* dev) {
@@ -3425,7 +3490,10 @@ template <class S>
 bool intersectJoint(const HashedMesh<S>& a, const HashedMesh<S>& b, const QueryOptions& options,
                     AllPairsResult* out) {
   if (!jointApplies(a, b, options)) return false;
-  *out = guarded([&](Context& ctx) { return jointImpl(ctx, a, b, options); });
+  guarded([&](Context& ctx) {
+    jointImpl(ctx, a, b, options, out);
+    return 0;
+  });
   return true;
 }
 
@@ -3539,6 +3607,12 @@ template QueryResult intersectMeshes(const HashedMesh<double>&, const HashedMesh
                                      const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<float>&, const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<double>&, const QueryOptions&);
+template void intersectMeshes(const HashedMesh<float>&, const HashedMesh<float>&,
+                              const QueryOptions&, QueryResult&);
+template void intersectMeshes(const HashedMesh<double>&, const HashedMesh<double>&,
+                              const QueryOptions&, QueryResult&);
+template void intersectSelf(const HashedMesh<float>&, const QueryOptions&, QueryResult&);
+template void intersectSelf(const HashedMesh<double>&, const QueryOptions&, QueryResult&);
 template DevicePairsResult intersectSelfOnDevice(const HashedMesh<float>&, const QueryOptions&,
                                                  TrianglePair*, std::size_t);
 template DevicePairsResult intersectSelfOnDevice(const HashedMesh<double>&, const QueryOptions&,

@@ -112,6 +112,17 @@ QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options);
 
+/// intersectMeshes() into `out`, a result kept across frames: the pairs are read back into its
+/// storage (by several threads where staging::pooledThreads allows: enough pairs, and `out`
+/// held at least half as many). On an exception `out`'s pairs are unspecified.
+template <class S>
+void intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b, const QueryOptions& options,
+                     QueryResult& out);
+
+/// intersectSelf() into `out`, as intersectMeshes into a result.
+template <class S>
+void intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options, QueryResult& out);
+
 /// intersectSelfOnDevice() on device 0: the pairs written to `out` (device memory, checked), at
 /// most `capacity` of them; the count is of every pair found. It shares the mesh's kept result
 /// with intersectSelf (copied into `out` when it answers; the query that keeps one reads its
@@ -142,7 +153,9 @@ bool intersectJointOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
 /// are hashed as one: a cache entry of their own holds the second mesh's vertices after the
 /// first's (its triangles' indices shifted), one build and one self query find every pair, the
 /// adjacency rule applies only within a mesh, and the sorted pairs are dealt out to the three
-/// results as they arrive (QueryProfile::joint). The pair sets and their order are those of the
+/// results as they arrive (QueryProfile::joint), into the storage of `out`'s three results (by
+/// several threads as intersectSelf into a result, when they held at least half as many pairs:
+/// a result kept across frames). The pair sets and their order are those of the
 /// three separate queries, for every predicate. Such a joint query keeps no self result
 /// (QueryResult::kept): for rigid meshes whose selfs are kept, the three queries cost less.
 /// KDET_FCL_CUDA_JOINT=0 turns it off (read at every call).

@@ -18,20 +18,30 @@
 // sizes of a pair list: their start and the zero-fill of a presized std::vector cost more than
 // they saved (benchmarks/RESULTS-gpu.md, "Read-back").
 //
+// Download into a result the caller keeps from frame to frame (pooledDownload): its storage is
+// there and sized already, so no zero-fill stands in the way, and several threads of a
+// persistent pool (CopyPool) copy the chunks out of the stage as they arrive. On an H100 host the
+// one thread copies about 7 GB/s: 445,614 pairs took 0.48 ms by one thread into a fresh vector
+// and 0.30 ms by four into a kept one, 1,000,000 pairs 0.90 against 0.38 ms; 61,530 pairs gained
+// nothing (benchmarks/RESULTS-gpu.md, "Pairs into a result kept across frames").
+//
 // Knobs (environment, read at every call, for tests and comparisons; a value out of range or
 // not a number throws InvalidInputError, kdet_fcl/detail/knobs.h):
 // KDET_FCL_CUDA_UPLOAD_THREADS=n (1..64) forces the number of host threads (1: one thread,
 // still chunked); KDET_FCL_CUDA_UPLOAD_CHUNK=b (4096 bytes to 4 GiB) sets the chunk size;
-// KDET_FCL_CUDA_DOWNLOAD_CHUNK=b the same for downloads.
+// KDET_FCL_CUDA_DOWNLOAD_CHUNK=b the same for downloads; KDET_FCL_CUDA_DOWNLOAD_THREADS=n
+// (1..64) the threads of a pooled download (1: the calling thread alone).
 
 #include <cuda_runtime.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -209,6 +219,45 @@ inline cudaError_t stagedUpload(void* dst, const void* src, std::size_t bytes, v
   return error;
 }
 
+/// The events of a download's chunks (downloadChunks). Destroyed on every way out (a pending
+/// event's resources are freed once it has fired), after the stream has drained, so that nothing
+/// leaves while a transfer into the stage is pending.
+struct ChunkEvents {
+  cudaStream_t s = nullptr;
+  std::vector<cudaEvent_t> ev;
+  std::size_t chunk = 0;  ///< elements per chunk
+  ChunkEvents() = default;
+  ChunkEvents(const ChunkEvents&) = delete;
+  ChunkEvents& operator=(const ChunkEvents&) = delete;
+  ~ChunkEvents() {
+    if (!ev.empty()) (void)cudaStreamSynchronize(s);
+    for (cudaEvent_t e : ev) (void)cudaEventDestroy(e);
+  }
+};
+
+/// Enqueues on stream `s` the transfer of `count` elements (count > 0) from device memory `src`
+/// into `stage`, in chunks of downloadChunk() bytes rounded down to whole elements (at least
+/// one), each followed by an event in `out`. Returns the first CUDA error, or cudaSuccess.
+template <class T>
+cudaError_t downloadChunks(const T* src, std::size_t count, T* stage, cudaStream_t s,
+                           ChunkEvents& out) {
+  out.s = s;
+  out.chunk = std::max<std::size_t>(1, downloadChunk() / sizeof(T));
+  const std::size_t chunks = (count + out.chunk - 1) / out.chunk;
+  out.ev.reserve(chunks);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const std::size_t off = c * out.chunk, n = std::min(out.chunk, count - off);
+    cudaEvent_t e = nullptr;
+    cudaError_t err = cudaEventCreateWithFlags(&e, cudaEventDisableTiming);
+    if (err != cudaSuccess) return err;
+    out.ev.push_back(e);
+    err = cudaMemcpyAsync(stage + off, src + off, n * sizeof(T), cudaMemcpyDeviceToHost, s);
+    if (err == cudaSuccess) err = cudaEventRecord(e, s);
+    if (err != cudaSuccess) return err;
+  }
+  return cudaSuccess;
+}
+
 /// Copies `count` elements from device memory `src` into host memory through the pinned buffer
 /// `stage` (at least `count` elements). What the caller enqueued on stream `s` before (the kernel
 /// that writes `src`) runs first. Every chunk's transfer into the stage is enqueued on `s`, each
@@ -222,36 +271,189 @@ template <class T, class Append>
 cudaError_t stagedDownload(const T* src, std::size_t count, T* stage, cudaStream_t s,
                            Append&& append) {
   if (count == 0) return cudaSuccess;
-  const std::size_t chunk = std::max<std::size_t>(1, downloadChunk() / sizeof(T));
-  const std::size_t chunks = (count + chunk - 1) / chunk;
-  // Destroyed on every way out (a pending event's resources are freed once it has fired), after
-  // the stream has drained, so that nothing leaves while a transfer into the stage is pending.
-  struct Events {
-    cudaStream_t s;
-    std::vector<cudaEvent_t> ev;
-    ~Events() {
-      (void)cudaStreamSynchronize(s);
-      for (cudaEvent_t e : ev) (void)cudaEventDestroy(e);
-    }
-  } events{s, {}};
-  events.ev.reserve(chunks);
-  for (std::size_t c = 0; c < chunks; ++c) {
-    const std::size_t off = c * chunk, n = std::min(chunk, count - off);
-    cudaEvent_t e = nullptr;
-    cudaError_t err = cudaEventCreateWithFlags(&e, cudaEventDisableTiming);
-    if (err != cudaSuccess) return err;
-    events.ev.push_back(e);
-    err = cudaMemcpyAsync(stage + off, src + off, n * sizeof(T), cudaMemcpyDeviceToHost, s);
-    if (err == cudaSuccess) err = cudaEventRecord(e, s);
-    if (err != cudaSuccess) return err;
-  }
-  for (std::size_t c = 0; c < chunks; ++c) {
+  ChunkEvents events;
+  const cudaError_t enq = downloadChunks(src, count, stage, s, events);
+  if (enq != cudaSuccess) return enq;
+  for (std::size_t c = 0; c < events.ev.size(); ++c) {
     const cudaError_t err = cudaEventSynchronize(events.ev[c]);
     if (err != cudaSuccess) return err;
-    const std::size_t off = c * chunk;
-    append(static_cast<const T*>(stage + off), std::min(chunk, count - off));
+    const std::size_t off = c * events.chunk;
+    append(static_cast<const T*>(stage + off), std::min(events.chunk, count - off));
   }
   return cudaSuccess;
+}
+
+/// Host threads of a pooled download of `chunks` chunks: KDET_FCL_CUDA_DOWNLOAD_THREADS (1..64;
+/// any other value throws), else kDownloadThreads and at most the hardware's thread count; never
+/// more than the chunks.
+constexpr int kDownloadThreads = 4;  // 4 beat 2 and 8 at 445,614 pairs, 8 level at 1M (H100)
+inline int downloadThreads(std::size_t chunks) {
+  long long t =
+      static_cast<long long>(detail::numberKnob("KDET_FCL_CUDA_DOWNLOAD_THREADS", 1, 64, 0));
+  if (t == 0) {
+    const unsigned hw = std::thread::hardware_concurrency();
+    t = std::min<long long>(kDownloadThreads, hw == 0 ? 1 : hw);
+  }
+  const long long most = static_cast<long long>(std::max<std::size_t>(chunks, 1));
+  return static_cast<int>(std::max<long long>(1, std::min(t, most)));
+}
+
+/// A pooled download pays for its threads only from this many chunks on (4: 1 MiB with the
+/// default chunk; 61,530 pairs, 0.5 MB, gained nothing from threads).
+constexpr std::size_t kPooledDownloadMinChunks = 4;
+
+/// Worker threads kept from one call to the next (starting threads per call cost more than they
+/// saved: "Read-back" in benchmarks/RESULTS-gpu.md). run() is not reentrant: one caller at a
+/// time (the CUDA backend's calls hold its mutex).
+class CopyPool {
+ public:
+  CopyPool() = default;
+  CopyPool(const CopyPool&) = delete;
+  CopyPool& operator=(const CopyPool&) = delete;
+  ~CopyPool() {
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    for (auto& t : workers_) t.join();
+  }
+
+  /// Runs `work` on `threads` threads, the calling one included, and returns when every one has
+  /// returned. Workers are started as needed and kept; where one cannot be started, fewer run
+  /// (at least the calling thread). `work` must not throw.
+  void run(int threads, const std::function<void()>& work) {
+    while (static_cast<int>(workers_.size()) + 1 < threads) {
+      try {
+        workers_.emplace_back([this] { loop(); });
+      } catch (...) {
+        break;  // no more threads: the ones there do the work
+      }
+    }
+    const int helpers = std::min(threads - 1, static_cast<int>(workers_.size()));
+    if (helpers > 0) {
+      std::lock_guard<std::mutex> lock(m_);
+      job_ = &work;
+      wanted_ = helpers;
+      running_ = helpers;
+      ++generation_;
+    }
+    if (helpers > 0) wake_.notify_all();
+    work();
+    if (helpers > 0) {
+      std::unique_lock<std::mutex> lock(m_);
+      done_.wait(lock, [&] { return running_ == 0; });
+      job_ = nullptr;
+    }
+  }
+
+  /// Worker threads started so far.
+  int workers() const { return static_cast<int>(workers_.size()); }
+
+ private:
+  void loop() {
+    unsigned long long seen = 0;
+    std::unique_lock<std::mutex> lock(m_);
+    while (true) {
+      wake_.wait(lock, [&] { return stop_ || (generation_ != seen && wanted_ > 0); });
+      if (stop_) return;
+      seen = generation_;
+      --wanted_;  // this worker takes part in this job
+      const std::function<void()>* job = job_;
+      lock.unlock();
+      (*job)();
+      lock.lock();
+      if (--running_ == 0) done_.notify_all();
+    }
+  }
+
+  std::vector<std::thread> workers_;
+  std::mutex m_;
+  std::condition_variable wake_, done_;
+  const std::function<void()>* job_ = nullptr;
+  unsigned long long generation_ = 0;
+  int wanted_ = 0, running_ = 0;
+  bool stop_ = false;
+};
+
+/// stagedDownload into destinations the caller has storage for (a result kept across frames):
+/// every chunk's transfer is enqueued at once; `ready()` runs on the calling thread once the
+/// first chunk has arrived (so that what the stream copied before it, such as counts, is there:
+/// the caller sizes its destinations then; it may throw, and the transfers have run when the
+/// exception leaves); then `threads` threads of `pool` (the calling one included) take the
+/// chunks, each waiting for its chunk's event and calling `place(offset, first, n)`: the chunk's
+/// n elements at `first` (in the stage) are those from element `offset` on. place is called
+/// concurrently for disjoint ranges and must not throw. Returns the first CUDA error, or
+/// cudaSuccess; the transfers have run when it returns. For count 0 no CUDA call is made, and
+/// neither ready nor place is called.
+template <class T, class Ready, class Place>
+cudaError_t pooledDownload(const T* src, std::size_t count, T* stage, cudaStream_t s,
+                           CopyPool& pool, int threads, Ready&& ready, Place&& place) {
+  if (count == 0) return cudaSuccess;
+  ChunkEvents events;
+  cudaError_t err = downloadChunks(src, count, stage, s, events);
+  if (err != cudaSuccess) return err;
+  err = cudaEventSynchronize(events.ev[0]);
+  if (err != cudaSuccess) return err;
+  ready();
+  const std::size_t chunks = events.ev.size();
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::mutex error_mutex;
+  cudaError_t error = cudaSuccess;
+  const std::function<void()> work = [&] {
+    while (!failed.load(std::memory_order_relaxed)) {
+      const std::size_t c = next.fetch_add(1);
+      if (c >= chunks) return;
+      const cudaError_t e = cudaEventSynchronize(events.ev[c]);
+      if (e != cudaSuccess) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (error == cudaSuccess) error = e;
+        failed = true;
+        return;
+      }
+      const std::size_t off = c * events.chunk;
+      place(off, static_cast<const T*>(stage + off), std::min(events.chunk, count - off));
+    }
+  };
+  pool.run(threads, work);
+  return error;
+}
+
+/// Whether a download of `count` elements into destinations that hold `held` elements now (a
+/// result kept from the frame before) goes by several threads (pooledDownload): at least
+/// kPooledDownloadMinChunks chunks, more than one thread (downloadThreads()), and at least half
+/// of the elements there already, so that sizing the destinations zero-fills at most the other
+/// half (a new result would be zero-filled whole first, which costs what the threads save).
+/// Returns the threads, or 0 for a download by the calling thread alone.
+inline int pooledThreads(std::size_t count, std::size_t held) {
+  const std::size_t chunk = std::max<std::size_t>(1, downloadChunk() / sizeof(std::uint64_t));
+  const std::size_t chunks = (count + chunk - 1) / chunk;
+  const int threads = downloadThreads(chunks);
+  const bool pooled = chunks >= kPooledDownloadMinChunks && threads > 1 && 2 * held >= count;
+  return pooled ? threads : 0;
+}
+
+/// The download of `count` elements into `out`, a vector whose storage the caller keeps (its
+/// old contents are replaced): by several threads of `pool` into `out` sized first where
+/// pooledThreads() says so, else by stagedDownload appended to `out` cleared.
+template <class T>
+cudaError_t downloadInto(const T* src, std::size_t count, T* stage, cudaStream_t s,
+                         CopyPool& pool, std::vector<T>& out) {
+  static_assert(sizeof(T) == sizeof(std::uint64_t), "chunks counted in 8-byte elements");
+  const int threads = pooledThreads(count, out.size());
+  if (threads == 0) {
+    out.clear();
+    out.reserve(count);
+    return stagedDownload(src, count, stage, s, [&](const T* first, std::size_t n) {
+      out.insert(out.end(), first, first + n);
+    });
+  }
+  return pooledDownload(
+      src, count, stage, s, pool, threads, [&] { out.resize(count); },
+      [&](std::size_t off, const T* first, std::size_t n) {
+        std::memcpy(static_cast<void*>(out.data() + off), first, n * sizeof(T));
+      });
 }
 
 }  // namespace staging

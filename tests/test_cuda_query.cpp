@@ -26,6 +26,7 @@
 #include <cuda_runtime_api.h>
 
 #include "../cuda/cuda_backend.h"
+#include "../cuda/staged_upload.h"
 #endif
 
 using namespace kdet_fcl;
@@ -425,6 +426,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_UPLOAD_CHUNK", {"4096", "4294967296"}, {"4095", "4294967297", "1M"}},
       {"KDET_FCL_CUDA_DOWNLOAD_CHUNK", {"4096", "4294967296"}, {"4095", "4294967297", "1M"}},
       {"KDET_FCL_CUDA_UPLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
+      {"KDET_FCL_CUDA_DOWNLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
   };
   for (const Knob& k : knobs) {
     for (const char* unset : {static_cast<const char*>(nullptr), ""}) {
@@ -1922,6 +1924,87 @@ TYPED_TEST(CudaQueryTyped, QueriesInRoundsFindTheSameCandidatesAndPairsInLessMem
   EXPECT_GT(r.profile.rounds, 4);
   EXPECT_LT(cand_bytes, r.profile.candidates * sizeof(unsigned long long) / 2) << report;
   cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, ResultsKeptAcrossFramesGetEachFramesPairs) {
+  // intersectMeshes, intersectSelf and intersectAll into a result kept from frame to frame (the
+  // CUDA backend reads the pairs back into its storage, by several threads where the result held
+  // at least half as many: staging::pooledThreads) give, frame after frame, exactly the by-value
+  // calls' results, whatever the result held before: more pairs (95,330 inter pairs, then 3,934),
+  // fewer, none, other flags. Pair counts of the inter query over the frames (float): 3,934,
+  // 3,960, 95,330, 3,934, 0, 95,330, 3,960. 4 KiB read-back chunks (512 pairs), so that the pooled path
+  // runs at these sizes; by 4 threads, then by 1. Then max_pairs, and the CPU backend.
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv chunk("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
+  auto clothAt = [](double t) { return makeDrapedCloth<S>(60, 4, 1, S(0.03), S(t)); };
+  HashedMesh<S> a(clothAt(0.8));
+  HashedMesh<S> b(clothAt(0.81));
+  const QueryOptions o = on(Backend::Cuda);
+  cuda::setProfiling(true);
+  int pooled = 0, pooled_joint = 0, frames = 0;
+  for (const char* threads : {"4", "1"}) {
+    kdet_test::ScopedEnv th("KDET_FCL_CUDA_DOWNLOAD_THREADS", threads);
+    QueryResult inter_kept, self_kept;
+    AllPairsResult all_kept;
+    for (double t : {0.81, 0.805, 0.8, 0.81, 0.9, 0.8, 0.805}) {
+      b.updateVertices(clothAt(t).vertices);
+      const std::string what = std::string(threads) + " threads, frame " +
+                               std::to_string(frames++) + " (t " + std::to_string(t) + ")";
+      const QueryResult inter = intersectMeshes(a, b, o);
+      pooled += staging::pooledThreads(inter.pairs.size(), inter_kept.pairs.size()) > 0;
+      intersectMeshes(a, b, inter_kept, o);
+      EXPECT_EQ(inter_kept.pairs, inter.pairs) << what;
+      EXPECT_TRUE(inter_kept.complete && !inter_kept.kept) << what;
+      const QueryResult self = intersectSelf(b, o);
+      intersectSelf(b, self_kept, o);
+      EXPECT_EQ(self_kept.pairs, self.pairs) << what;
+      EXPECT_EQ(self_kept.kept, self.kept) << what;
+      const AllPairsResult all = intersectAll(a, b, o);
+      const std::size_t total =
+          all.self_a.pairs.size() + all.self_b.pairs.size() + all.inter.pairs.size();
+      const std::size_t held = all_kept.self_a.pairs.size() + all_kept.self_b.pairs.size() +
+                               all_kept.inter.pairs.size();
+      pooled_joint += staging::pooledThreads(total, held) > 0;
+      intersectAll(a, b, all_kept, o);
+      EXPECT_TRUE(cuda::lastQueryProfile().joint) << what;
+      EXPECT_EQ(all_kept.self_a.pairs, all.self_a.pairs) << what;
+      EXPECT_EQ(all_kept.self_b.pairs, all.self_b.pairs) << what;
+      EXPECT_EQ(all_kept.inter.pairs, all.inter.pairs) << what;
+      EXPECT_EQ(all_kept.inter.pairs, inter.pairs) << what;
+    }
+  }
+  cuda::setProfiling(false);
+  // With 4 threads: the frames after a frame with at least half as many pairs (inter: frames
+  // 2, 4 and 7; joint, whose selfs hold about 3,640 pairs in every frame: 2, 4, 5 and 7); with
+  // 1 thread, none.
+  EXPECT_EQ(pooled, 3);
+  EXPECT_EQ(pooled_joint, 4);
+  // A kept result full of another query's pairs, with other flags, and max_pairs: the prefix.
+  b.updateVertices(clothAt(0.8).vertices);
+  QueryResult r;
+  r.pairs.assign(200000, TrianglePair{1, 2});
+  r.kept = true;
+  const QueryResult first = intersectMeshes(a, b, on(Backend::Cuda, 100));
+  intersectMeshes(a, b, r, on(Backend::Cuda, 100));
+  EXPECT_EQ(r.pairs, first.pairs);
+  EXPECT_EQ(r.pairs.size(), 100u);
+  EXPECT_FALSE(r.complete);
+  EXPECT_FALSE(r.kept);
+  // The CPU backend: the by-value call's result, whatever was there.
+  for (Backend backend : {Backend::Cpu, Backend::Cuda}) {
+    QueryResult c;
+    c.pairs.assign(5, TrianglePair{9, 9});
+    intersectSelf(a, c, on(backend));
+    EXPECT_EQ(sorted(c.pairs), sorted(intersectSelf(a, on(Backend::Cpu)).pairs));
+    AllPairsResult k;
+    k.inter.pairs.assign(300000, TrianglePair{3, 4});
+    intersectAll(a, b, k, on(backend));
+    EXPECT_EQ(sorted(k.inter.pairs), sorted(intersectMeshes(a, b, on(Backend::Cpu)).pairs));
+    EXPECT_EQ(sorted(k.self_b.pairs), sorted(intersectSelf(b, on(Backend::Cpu)).pairs));
+  }
 #endif
 }
 

@@ -1,8 +1,9 @@
 // The staged copies (cuda/staged_upload.h) that the CUDA backend and the GPU BVH baseline share.
 // Upload: every byte arrives, nothing beyond the range is written, whatever the number of host
 // threads and the chunk size. Download: every element arrives, in order, in whole-element chunks,
-// and a throwing consumer leaves cleanly. The knobs are parsed and bounded, and a value out of
-// bounds throws. Pinned uploads (a registered range's whole pages by DMA, its ends staged) bring
+// and a throwing consumer leaves cleanly; into a kept vector (downloadInto) by several threads of
+// a persistent pool (pooledDownload, CopyPool), the same elements, old contents replaced. The
+// knobs are parsed and bounded, and a value out of bounds throws. Pinned uploads (a registered range's whole pages by DMA, its ends staged) bring
 // every byte too. The copy tests skip without a device; the knob, page and empty-range tests need
 // none.
 
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -19,6 +21,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cuda/staged_upload.h"
@@ -65,6 +68,7 @@ struct UploadRig {
 
 using kdet_test::ScopedEnv;
 using kdet_fcl::staging::downloadChunk;
+using kdet_fcl::staging::downloadThreads;
 using kdet_fcl::staging::stagedDownload;
 using kdet_fcl::staging::stagedUpload;
 using kdet_fcl::staging::uploadChunk;
@@ -317,6 +321,133 @@ TEST(StagedDownload, TheChunkKnobIsParsedAndBoundedApartFromTheUploads) {
   ScopedEnv dc("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "12288");
   EXPECT_EQ(downloadChunk(), 12288u);
   EXPECT_EQ(uploadChunk(), 8192u);
+}
+
+TEST(CopyPool, RunsTheWorkOnTheThreadsAskedForAndKeepsThem) {
+  kdet_fcl::staging::CopyPool pool;
+  int most = 1;
+  for (int threads : {1, 3, 4, 2, 4}) {
+    most = std::max(most, threads);
+    std::atomic<int> ran{0};
+    std::vector<std::thread::id> ids(8);
+    const std::function<void()> work = [&] { ids[std::size_t(ran.fetch_add(1))] = std::this_thread::get_id(); };
+    pool.run(threads, work);
+    EXPECT_EQ(ran.load(), threads);
+    std::sort(ids.begin(), ids.begin() + threads);
+    EXPECT_EQ(std::unique(ids.begin(), ids.begin() + threads) - ids.begin(), threads)
+        << "each share on its own thread";
+    EXPECT_EQ(pool.workers(), most - 1) << "workers are kept, never more than asked for";
+  }
+}
+
+TEST(PooledDownload, EveryElementArrivesIntoAKeptVectorWhateverItHeld) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  const std::size_t most = (std::size_t(1) << 18) + 3;  // pairs: 2 MiB
+  std::vector<Pair8> src(most);
+  for (std::size_t i = 0; i < most; ++i)
+    src[i] = {static_cast<std::uint32_t>(i * 2654435761u), static_cast<std::uint32_t>(~i)};
+  Pair8* dev = nullptr;
+  ASSERT_EQ(cudaMalloc(&dev, most * sizeof(Pair8)), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(dev, src.data(), most * sizeof(Pair8), cudaMemcpyHostToDevice),
+            cudaSuccess);
+  Pair8* stage = nullptr;
+  ASSERT_EQ(cudaMallocHost(&stage, most * sizeof(Pair8)), cudaSuccess);
+  kdet_fcl::staging::CopyPool pool;
+  std::vector<Pair8> kept;  // kept across the cases: larger, smaller and empty in turn
+  int pooled = 0;
+  for (const char* threads : {"4", "1", static_cast<const char*>(nullptr)}) {
+    ScopedEnv t("KDET_FCL_CUDA_DOWNLOAD_THREADS", threads);
+    for (const char* chunk : {"4096", "5001", static_cast<const char*>(nullptr)}) {
+      ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", chunk);
+      for (std::size_t n : {most, std::size_t(7), std::size_t(0), most - 1000, std::size_t(513),
+                            std::size_t(5000), std::size_t(4999), most}) {
+        const std::size_t shift = (n * 7 + 3) % 11;
+        if (n + shift > most) n = most - shift;
+        SCOPED_TRACE(std::string("threads ") + (threads ? threads : "default") + ", chunk " +
+                     (chunk ? chunk : "default") + ", pairs " + std::to_string(n) +
+                     " after " + std::to_string(kept.size()));
+        pooled += kdet_fcl::staging::pooledThreads(n, kept.size()) > 0;
+        ASSERT_EQ(kdet_fcl::staging::downloadInto(dev + shift, n, stage, nullptr, pool, kept),
+                  cudaSuccess);
+        ASSERT_EQ(kept.size(), n);
+        EXPECT_EQ(std::memcmp(kept.data(), src.data() + shift, n * sizeof(Pair8)), 0);
+      }
+    }
+  }
+  EXPECT_GT(pooled, 6) << "the pooled path ran";
+  EXPECT_GT(pool.workers(), 0);
+  EXPECT_EQ(cudaGetLastError(), cudaSuccess);
+  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
+  EXPECT_EQ(cudaFree(dev), cudaSuccess);
+}
+
+TEST(PooledDownload, ReadyRunsAfterTheFirstChunkAndAThrowLeavesCleanly) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  const std::size_t n = 100000;
+  std::vector<Pair8> src(n);
+  for (std::size_t i = 0; i < n; ++i) src[i] = {static_cast<std::uint32_t>(i), 7u};
+  Pair8* dev = nullptr;
+  ASSERT_EQ(cudaMalloc(&dev, n * sizeof(Pair8)), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(dev, src.data(), n * sizeof(Pair8), cudaMemcpyHostToDevice), cudaSuccess);
+  Pair8* stage = nullptr;
+  ASSERT_EQ(cudaMallocHost(&stage, n * sizeof(Pair8)), cudaSuccess);
+  ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
+  kdet_fcl::staging::CopyPool pool;
+  // ready() sees the first chunk in the stage; every element is placed once, where it belongs.
+  std::vector<Pair8> back(n, Pair8{0, 0});
+  std::vector<std::atomic<int>> placed(n);
+  bool first_there = false;
+  ASSERT_EQ(kdet_fcl::staging::pooledDownload(
+                dev, n, stage, nullptr, pool, 4,
+                [&] { first_there = std::memcmp(stage, src.data(), 4096) == 0; },
+                [&](std::size_t off, const Pair8* first, std::size_t k) {
+                  std::memcpy(back.data() + off, first, k * sizeof(Pair8));
+                  for (std::size_t i = off; i < off + k; ++i) placed[i].fetch_add(1);
+                }),
+            cudaSuccess);
+  EXPECT_TRUE(first_there);
+  EXPECT_EQ(std::memcmp(back.data(), src.data(), n * sizeof(Pair8)), 0);
+  std::size_t wrong = 0;
+  for (auto& p : placed) wrong += p.load() != 1;
+  EXPECT_EQ(wrong, 0u);
+  // A throwing ready() (a destination that cannot grow): it comes out after every transfer, and
+  // nothing is placed.
+  std::size_t calls = 0;
+  EXPECT_THROW(kdet_fcl::staging::pooledDownload(
+                   dev, n, stage, nullptr, pool, 4, [] { throw std::runtime_error("no memory"); },
+                   [&](std::size_t, const Pair8*, std::size_t) { ++calls; }),
+               std::runtime_error);
+  EXPECT_EQ(calls, 0u);
+  EXPECT_EQ(cudaStreamQuery(nullptr), cudaSuccess);
+  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
+  EXPECT_EQ(cudaFree(dev), cudaSuccess);
+}
+
+TEST(PooledDownload, ThreadsKnobAndWhenThePoolRuns) {
+  {
+    ScopedEnv t("KDET_FCL_CUDA_DOWNLOAD_THREADS", "6");
+    EXPECT_EQ(downloadThreads(100), 6);
+    EXPECT_EQ(downloadThreads(2), 2);  // never more threads than chunks
+    EXPECT_EQ(downloadThreads(0), 1);
+  }
+  for (const char* bad : {"0", "65", "x", "-1", "4 "}) {
+    ScopedEnv t("KDET_FCL_CUDA_DOWNLOAD_THREADS", bad);
+    EXPECT_THROW(downloadThreads(1000), kdet_fcl::InvalidInputError) << "'" << bad << "'";
+  }
+  ScopedEnv t("KDET_FCL_CUDA_DOWNLOAD_THREADS", nullptr);
+  ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", nullptr);
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  EXPECT_EQ(downloadThreads(1000), int(std::min<unsigned>(kdet_fcl::staging::kDownloadThreads, hw)));
+  // 256 KiB chunks of 8-byte pairs: from 4 chunks (131,072 pairs), into a destination that held
+  // at least half as many.
+  using kdet_fcl::staging::pooledThreads;
+  const std::size_t four = 4 * 32768;
+  EXPECT_EQ(pooledThreads(four - 32768, four), 0) << "three chunks: one thread";
+  EXPECT_EQ(pooledThreads(four, 0), 0) << "a new result: one thread (no zero-fill first)";
+  EXPECT_EQ(pooledThreads(four, four / 2 - 1), 0);
+  EXPECT_EQ(pooledThreads(four, four / 2), hw > 1 ? downloadThreads(4) : 0);
+  ScopedEnv one("KDET_FCL_CUDA_DOWNLOAD_THREADS", "1");
+  EXPECT_EQ(pooledThreads(100 * four, 100 * four), 0) << "one thread asked for";
 }
 
 }  // namespace

@@ -298,6 +298,54 @@ TEST(Query, IntersectAllGivesEachSelfAndTheInterPairs) {
   }
 }
 
+TEST(Query, ResultsKeptAcrossFramesAreReplacedByEachFramesResult) {
+  // intersectMeshes, intersectSelf and intersectAll into a result the caller keeps: each call
+  // replaces it by the by-value call's result (pairs, complete, kept), whatever it held.
+  kdet_test::ScopedEnv keep_on("KDET_FCL_CPU_SELF_CACHE", nullptr);  // (off in test binaries)
+  HashedMesh<double> a(makeRandomSoup<double>(500, 3.0, 0.2, 2.0, 77));
+  HashedMesh<double> b(makeRandomSoup<double>(400, 3.0, 0.2, 2.0, 78));
+  QueryResult inter, self;
+  AllPairsResult all;
+  inter.pairs.assign(100000, TrianglePair{7, 7});  // stale: more pairs than any frame has
+  self.kept = true;
+  all.self_b.complete = false;
+  for (std::uint64_t seed : {78, 79, 80}) {
+    b.updateVertices(makeRandomSoup<double>(400, 3.0, 0.2, 2.0, seed).vertices);
+    const std::string what = "seed " + std::to_string(seed);
+    intersectMeshes(a, b, inter);
+    EXPECT_EQ(inter.pairs, intersectMeshes(a, b).pairs) << what;
+    EXPECT_TRUE(inter.complete) << what;
+    const QueryResult by_value = intersectSelf(b);
+    intersectSelf(b, self);  // (the geometry's second self query: it runs and keeps its result)
+    EXPECT_EQ(self.pairs, by_value.pairs) << what;
+    EXPECT_FALSE(self.kept) << what;
+    intersectAll(a, b, all);
+    EXPECT_EQ(all.self_a.pairs, intersectSelf(a).pairs) << what;
+    EXPECT_EQ(all.self_b.pairs, intersectSelf(b).pairs) << what;
+    EXPECT_EQ(all.inter.pairs, inter.pairs) << what;
+    EXPECT_TRUE(all.self_a.complete && all.self_b.complete && all.inter.complete) << what;
+    EXPECT_FALSE(inter.pairs.empty()) << what;
+  }
+  // The third self query of that geometry is answered from the kept result.
+  const std::vector<TrianglePair> ran = self.pairs;
+  intersectSelf(b, self);
+  EXPECT_TRUE(self.kept);
+  EXPECT_EQ(self.pairs, ran);
+  QueryOptions two;
+  two.max_pairs = 2;
+  intersectMeshes(a, b, inter, two);
+  EXPECT_EQ(inter.pairs, intersectMeshes(a, b, two).pairs);
+  EXPECT_EQ(inter.pairs.size(), 2u);
+  EXPECT_FALSE(inter.complete);
+  if (cudaDeviceCount() == 0) {
+    QueryOptions cuda;
+    cuda.backend = Backend::Cuda;
+    EXPECT_THROW(intersectAll(a, b, all, cuda), BackendUnavailableError);
+    EXPECT_THROW(intersectSelf(a, self, cuda), BackendUnavailableError);
+    EXPECT_THROW(intersectMeshes(a, b, inter, cuda), BackendUnavailableError);
+  }
+}
+
 TEST(Query, CudaBackendRequestIsATypedError) {
   if (cudaDeviceCount() > 0) GTEST_SKIP() << "a CUDA device is present (the cuda tests cover it)";
   HashedMesh<double> a(makeSphere<double>({0, 0, 0}, 1.0, 8, 4));

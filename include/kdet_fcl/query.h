@@ -72,6 +72,23 @@ QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options = {});
 
+/// intersectMeshes into `out`, a result the caller keeps from frame to frame: `out` is replaced
+/// by the same result (pairs, order, flags), and on the CUDA backend the pairs are read back
+/// into the storage `out` already holds, by several host threads when they are many (from 1 MiB)
+/// and `out` held at least half as many (KDET_FCL_CUDA_DOWNLOAD_THREADS, default 4). The by-value
+/// call cannot do that: a new vector would have to be zero-filled before several threads could
+/// write it. On an H100 host the
+/// read-back of 445,614 pairs took 0.30 ms this way against 0.48 ms into a new result
+/// (benchmarks/RESULTS-gpu.md). The CPU backend fills a new result and moves it into `out`. On an
+/// exception, `out`'s pairs are unspecified.
+template <class S>
+void intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b, QueryResult& out,
+                     const QueryOptions& options = {});
+
+/// intersectSelf into `out`, a result kept from frame to frame, as intersectMeshes into a result.
+template <class S>
+void intersectSelf(const HashedMesh<S>& mesh, QueryResult& out, const QueryOptions& options = {});
+
 /// Every intersecting pair of two meshes: each one's self pairs and the pairs between them.
 struct AllPairsResult {
   QueryResult self_a;  ///< intersectSelf(a)
@@ -89,6 +106,12 @@ struct AllPairsResult {
 template <class S>
 AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
                             const QueryOptions& options = {});
+
+/// intersectAll into `out`, kept from frame to frame, as intersectMeshes into a result: each of
+/// its three results is replaced, and the CUDA backend reads the pairs back into their storage.
+template <class S>
+void intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b, AllPairsResult& out,
+                  const QueryOptions& options = {});
 
 /// The outcome of a query whose pairs went to device memory (intersectSelfOnDevice,
 /// intersectMeshesOnDevice).

@@ -333,17 +333,46 @@ QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options
 }
 
 template <class S>
-AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
-                            const QueryOptions& options) {
+void intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b, QueryResult& out,
+                     const QueryOptions& options) {
+  if (resolveBackend(options.backend, a.numTriangles() + b.numTriangles()) == Backend::Cuda) {
+#if KDET_FCL_HAVE_CUDA
+    cuda::intersectMeshes(a, b, options, out);
+    return;
+#endif
+  }
+  out = cpu::intersectMeshes(a, b, options);
+}
+
+template <class S>
+void intersectSelf(const HashedMesh<S>& mesh, QueryResult& out, const QueryOptions& options) {
+  if (resolveBackend(options.backend, mesh.numTriangles()) == Backend::Cuda) {
+#if KDET_FCL_HAVE_CUDA
+    cuda::intersectSelf(mesh, options, out);
+    return;
+#endif
+  }
+  out = cpu::intersectSelf(mesh, options);
+}
+
+template <class S>
+void intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b, AllPairsResult& out,
+                  const QueryOptions& options) {
   QueryOptions o = options;  // one backend for the three queries, chosen by both meshes' size
   o.backend = resolveBackend(options.backend, a.numTriangles() + b.numTriangles());
-  AllPairsResult r;
 #if KDET_FCL_HAVE_CUDA
-  if (o.backend == Backend::Cuda && cuda::intersectJoint(a, b, o, &r)) return r;
+  if (o.backend == Backend::Cuda && cuda::intersectJoint(a, b, o, &out)) return;
 #endif
-  r.self_a = intersectSelf(a, o);
-  r.self_b = intersectSelf(b, o);
-  r.inter = intersectMeshes(a, b, o);
+  intersectSelf(a, out.self_a, o);
+  intersectSelf(b, out.self_b, o);
+  intersectMeshes(a, b, out.inter, o);
+}
+
+template <class S>
+AllPairsResult intersectAll(const HashedMesh<S>& a, const HashedMesh<S>& b,
+                            const QueryOptions& options) {
+  AllPairsResult r;  // (no storage to reuse: each result is filled as the by-value queries do)
+  intersectAll(a, b, r, options);
   return r;
 }
 
@@ -437,6 +466,16 @@ template QueryResult intersectMeshes(const HashedMesh<double>&, const HashedMesh
                                      const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<float>&, const QueryOptions&);
 template QueryResult intersectSelf(const HashedMesh<double>&, const QueryOptions&);
+template void intersectMeshes(const HashedMesh<float>&, const HashedMesh<float>&, QueryResult&,
+                              const QueryOptions&);
+template void intersectMeshes(const HashedMesh<double>&, const HashedMesh<double>&, QueryResult&,
+                              const QueryOptions&);
+template void intersectSelf(const HashedMesh<float>&, QueryResult&, const QueryOptions&);
+template void intersectSelf(const HashedMesh<double>&, QueryResult&, const QueryOptions&);
+template void intersectAll(const HashedMesh<float>&, const HashedMesh<float>&, AllPairsResult&,
+                           const QueryOptions&);
+template void intersectAll(const HashedMesh<double>&, const HashedMesh<double>&,
+                           AllPairsResult&, const QueryOptions&);
 template AllPairsResult intersectAll(const HashedMesh<float>&, const HashedMesh<float>&,
                                      const QueryOptions&);
 template AllPairsResult intersectAll(const HashedMesh<double>&, const HashedMesh<double>&,
