@@ -70,8 +70,11 @@
 // updateVertices writes into the same buffer) and copied by one DMA from there, with no staging
 // copy (QueryProfile::pinned_uploads); KDET_FCL_CUDA_PIN_VERTICES=0 keeps the staged copy.
 // The pairs come back through pinned memory in 256 KiB chunks, each appended to the result as it
-// arrives;
-// KDET_FCL_CUDA_DOWNLOAD_CHUNK=b sets that chunk size (read at every query). Every query first
+// arrives; KDET_FCL_CUDA_DOWNLOAD_CHUNK=b sets that chunk size (read at every query). Into a
+// result the caller keeps across frames (intersectSelf/intersectMeshes/intersectAll into a
+// result), from 4 chunks and where the result held at least half as many pairs, 4 threads of a
+// pool kept by the backend copy the chunks into the result's own storage
+// (staging::pooledThreads; KDET_FCL_CUDA_DOWNLOAD_THREADS=n, 1..64, sets the threads). Every query first
 // reads every knob (checkKnobs()): a value a knob does not accept (not 0 or 1 for a switch, not
 // one of its numbers, out of its range, "abc") throws InvalidInputError naming the variable,
 // before any work; unset or empty means the default.
