@@ -32,5 +32,6 @@ for f in frames[2:]:
     for k,v in b.items(): agg['B '+k].append(v)
     for k,v in q.items(): agg['Q '+k].append(v)
     agg['B total'].append(sum(b.values())); agg['Q total'].append(sum(q.values()))
+    agg['N kernels (kDet, per frame)'].append(sum(1 for n, _ in f if not n.startswith('kdet_bvh')))
 for k,v in sorted(agg.items()):
     print(f"{k:45s} n={len(v):3d} med={statistics.median(v):8.1f} min={min(v):8.1f} max={max(v):8.1f}")
