@@ -54,8 +54,8 @@
 // its range, which self queries then skip without a lookup (upperLevels(); by default recorded
 // while the mesh's last self query found at most 4 candidates per triangle). The pairs are put
 // in (a, b) order by counting them per segment of first indices as the exact tests emit them (a
-// scan, a scatter, a rank within each segment) when there are at least 4096 and no segment holds
-// more than 1024 (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=n: n), else by the radix sort;
+// scan, a scatter, a rank within each segment) when there are at least kCountOrderMinPairs and no
+// segment holds more than 1024 (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=n: n), else by the radix sort;
 // KDET_FCL_CUDA_COUNT_ORDER=0 always sorts, =1 counts whatever the number of pairs (read at every
 // query). The warp-wide candidate scan passes the entries of the levels above a query's own by
 // the size rule without loading their diameters (KDET_FCL_CUDA_SIZE_BY_LEVEL=0 loads them), and
@@ -104,6 +104,13 @@
 
 namespace kdet_fcl {
 namespace cuda {
+
+/// The fewest pairs that are put in order by counting (see above): below, CUB's radix sort of the
+/// 64-bit keys runs as one single-tile kernel (up to 256 threads x 9 keys = 2,304 keys on sm_90);
+/// above that it takes a histogram, a scan and one onesweep pass per 8 key bits, 37 us for 3,384
+/// pairs of the 20k cloth against 14 us for the count's scan, scatter and rank (H100, ncu;
+/// benchmarks/RESULTS-gpu.md). It was 4,096 until 2026-11-24.
+constexpr std::size_t kCountOrderMinPairs = 2048;
 
 /// intersectMeshes() on device 0. Throws CudaError on a CUDA failure (the device caches are then
 /// dropped, so a later call starts from scratch).
@@ -207,6 +214,9 @@ struct QueryProfile {
   bool filter_decides = false;  ///< the plane filter finished the pairs its filters decide
                                 ///< (KDET_FCL_CUDA_FILTER_DECIDES; Predicate::Exact with the
                                 ///< filter on)
+  unsigned int exact_blocks = 0;  ///< blocks of the last exact-test kernel launched: the blocks
+                                  ///< it keeps resident (KDET_FCL_CUDA_RESIDENT_GRIDS, default),
+                                  ///< or 16 per SM (=0)
   bool staged_pairs = false;  ///< the warp-wide phase 1 (warp scan, cells' pairs) emitted its
                               ///< candidates through a warp's stage in shared memory
                               ///< (KDET_FCL_CUDA_STAGE_PAIRS; the tile scan's never are)
@@ -228,9 +238,10 @@ struct QueryProfile {
   bool joint = false;  ///< intersectAll hashed both meshes as one and ran one self query
                        ///< (KDET_FCL_CUDA_JOINT)
   bool pairs_counted = false;  ///< the pairs were put in order by counting them per segment of
-                               ///< first indices, not by the radix sort (fewer than 4096 pairs or
-                               ///< a segment of more than 1024: the sort; KDET_FCL_CUDA_COUNT_ORDER
-                               ///< =0: always the sort, =1: counted whatever the pair count).
+                               ///< first indices, not by the radix sort (fewer than
+                               ///< kCountOrderMinPairs pairs or a segment of more than 1024: the
+                               ///< sort; KDET_FCL_CUDA_COUNT_ORDER =0: always the sort, =1:
+                               ///< counted whatever the pair count).
                                ///< False when no pair was delivered (none found, or capacity 0)
 };
 void setProfiling(bool on);

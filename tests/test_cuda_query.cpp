@@ -427,6 +427,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_DOWNLOAD_CHUNK", {"4096", "4294967296"}, {"4095", "4294967297", "1M"}},
       {"KDET_FCL_CUDA_UPLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
       {"KDET_FCL_CUDA_DOWNLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
+      {"KDET_FCL_CUDA_RESIDENT_GRIDS", on_off, not_on_off},
   };
   for (const Knob& k : knobs) {
     for (const char* unset : {static_cast<const char*>(nullptr), ""}) {
@@ -872,7 +873,9 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   // The filter can be switched off per query (KDET_FCL_CUDA_PLANE_FILTER=0), or made to only drop
   // pairs (KDET_FCL_CUDA_FILTER_DECIDES=0); every way, and with tiny buffers (every buffer
   // overflows, the survivors' too), the pairs are the CPU's. Deciding, the filter leaves fewer
-  // pairs to the exact kernel than dropping alone.
+  // pairs to the exact kernel than dropping alone. The filter and the exact kernels run the
+  // blocks they keep resident (fewer than 16 per SM for the exact kernels), or, with
+  // KDET_FCL_CUDA_RESIDENT_GRIDS=0, 8 and 16 per SM: the same pairs.
   KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(80, 4.0, 1.0, 0.03, 1.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 48, 24));
@@ -884,22 +887,36 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   struct Mode {
     const char* filter;
     const char* decides;
+    const char* resident;
   };
+  [[maybe_unused]] int sms = 0;
+#if KDET_FCL_TEST_HAVE_CUDA
+  ASSERT_EQ(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, 0), cudaSuccess);
+#endif
   [[maybe_unused]] std::size_t dropping[3] = {0, 0, 0};  // filter 1, decides 0 (run first)
-  for (const Mode mode : {Mode{"0", "1"}, Mode{"1", "0"}, Mode{"1", "1"}}) {
+  for (const Mode mode : {Mode{"0", "1", "1"}, Mode{"1", "0", "1"}, Mode{"1", "1", "1"},
+                          Mode{"0", "1", "0"}, Mode{"1", "1", "0"}}) {
     [[maybe_unused]] std::size_t exact[3] = {0, 0, 0};  // uncapped: inter, self, sheets
     for (const char* cap : {"", "2", "50"}) {
       kdet_test::ScopedEnv f("KDET_FCL_CUDA_PLANE_FILTER", mode.filter),
           d("KDET_FCL_CUDA_FILTER_DECIDES", mode.decides),
+          r("KDET_FCL_CUDA_RESIDENT_GRIDS", mode.resident),
           c("KDET_FCL_CUDA_PAIR_CAPACITY", cap);
       const std::string what = std::string("filter ") + mode.filter + " decides " +
-                               mode.decides + " cap '" + cap + "'";
+                               mode.decides + " resident grids " + mode.resident + " cap '" +
+                               cap + "'";
 #if KDET_FCL_TEST_HAVE_CUDA
       cuda::setProfiling(true);
 #endif
       EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs, cpu_inter) << what;
 #if KDET_FCL_TEST_HAVE_CUDA
       const cuda::QueryProfile p = cuda::lastQueryProfile();
+      if (*mode.resident == '1') {
+        EXPECT_GT(p.exact_blocks, 0u) << what;
+        EXPECT_LT(p.exact_blocks, 16u * unsigned(sms)) << what;
+      } else {
+        EXPECT_EQ(p.exact_blocks, 16u * unsigned(sms)) << what;
+      }
       EXPECT_EQ(p.filter_decides, *mode.filter == '1' && *mode.decides == '1') << what;
       if (*mode.filter == '0') EXPECT_EQ(p.exact_tests, p.candidates) << what;
       else EXPECT_LT(p.exact_tests, p.candidates) << what;
@@ -917,7 +934,7 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
     }
 #if KDET_FCL_TEST_HAVE_CUDA
     if (*mode.filter == '1' && *mode.decides == '0') std::copy(exact, exact + 3, dropping);
-    if (*mode.filter == '1' && *mode.decides == '1') {
+    if (*mode.filter == '1' && *mode.decides == '1' && *mode.resident == '1') {
       // The cloth on the sphere crosses it transversally: its pairs are decided by the filter.
       EXPECT_LT(exact[0], dropping[0] / 2) << "inter";
       EXPECT_LE(exact[1], dropping[1]) << "self";
@@ -1557,14 +1574,16 @@ TYPED_TEST(CudaQueryTyped, AdjacencyByIndexInPhaseOneDropsTheCoordinateNeighbour
 
 TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // The pairs are put in order by counting them per segment of first indices (a scan, a scatter,
-  // a rank within each segment) when there are at least 4096 and no segment holds more than 1024
-  // (KDET_FCL_CUDA_COUNT_ORDER=1: whatever the number of pairs); otherwise, and with
-  // KDET_FCL_CUDA_COUNT_ORDER=0, the radix sort orders them. The orders must be the same, on
-  // self, inter and joint queries, meshes whose segments span several first indices (more than
-  // 2^16 triangles), max_pairs, a buffer on the device smaller than the pairs, forced overflows,
-  // and fans: 1024 pairs in one segment (counted when forced), 1025 (sorted), 80 fans of 60
-  // (4,800 pairs: counted by default); with KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=300, segments of 300
-  // (counted when forced) and 301 (sorted), and 20 fans of 257 (5,140 pairs: counted by default).
+  // a rank within each segment) when there are at least cuda::kCountOrderMinPairs (2048) and no
+  // segment holds more than 1024 (KDET_FCL_CUDA_COUNT_ORDER=1: whatever the number of pairs);
+  // otherwise, and with KDET_FCL_CUDA_COUNT_ORDER=0, the radix sort orders them. The orders must
+  // be the same, on self, inter and joint queries, meshes whose segments span several first
+  // indices (more than 2^16 triangles), max_pairs, a buffer on the device smaller than the pairs,
+  // forced overflows, and fans: 1024 pairs in one segment (counted when forced), 1025 (sorted),
+  // 80 fans of 60 (4,800 pairs: counted by default), 34 and 40 fans of 60 (2,040 pairs: sorted by
+  // default; 2,400: counted, where the limit was 4,096 until 2026-11-24); with
+  // KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=300, segments of 300 (counted when forced) and 301
+  // (sorted), and 20 fans of 257 (5,140 pairs: counted by default).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -1586,7 +1605,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // The expected choices for a query of a mesh of `triangles` that finds `pairs`.
   auto choices = [](const std::vector<TrianglePair>& pairs, std::size_t triangles) {
     const bool fits = !pairs.empty() && largestSegment({pairs}, triangles) <= 1024;
-    return std::make_pair(fits && pairs.size() >= 4096, fits);
+    return std::make_pair(fits && pairs.size() >= cuda::kCountOrderMinPairs, fits);
   };
   auto selfPairs = [](const HashedMesh<S>& m, std::size_t max_pairs = 0) {
     return [&m, max_pairs] { return intersectSelf(m, on(Backend::Cuda, max_pairs)).pairs; };
@@ -1650,7 +1669,8 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
     };
     const auto by_default = run();
     EXPECT_EQ(by_default.first, want) << what;
-    EXPECT_EQ(by_default.second, fits && want.size() - 1 >= 4096) << what << ", by default";
+    EXPECT_EQ(by_default.second, fits && want.size() - 1 >= cuda::kCountOrderMinPairs)
+        << what << ", by default";
     for (const char* knob : {"1", "0"}) {
       kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
       const auto other = run();
@@ -1694,6 +1714,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
     const char* most;
   };
   for (const Fans fk : {Fans{1, 1024, nullptr}, Fans{1, 1025, nullptr}, Fans{80, 60, nullptr},
+                        Fans{34, 60, nullptr}, Fans{40, 60, nullptr},
                         Fans{1, 300, "300"}, Fans{1, 301, "300"}, Fans{20, 257, "300"}}) {
     const std::size_t fans = fk.fans, k = fk.k;
     kdet_test::ScopedEnv most("KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", fk.most);
@@ -1702,7 +1723,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
     const std::string what = std::to_string(fans) + " fans of " + std::to_string(k) +
                              ", segments of at most " + std::to_string(limit);
     const std::vector<TrianglePair> pairs =
-        orders(what, fans * k >= 4096 && k <= limit, k <= limit, selfPairs(m));
+        orders(what, fans * k >= cuda::kCountOrderMinPairs && k <= limit, k <= limit, selfPairs(m));
     ASSERT_EQ(pairs.size(), fans * k) << what;
     for (std::size_t f = 0; f < fans; ++f)
       for (std::size_t i = 0; i < k; ++i) {
