@@ -2865,32 +2865,17 @@ struct WarpScanLaunch {
 /// occupancy calculator gives for `kernel` (cached per kernel; the context's mutex serialises the
 /// callers).
 template <class Kernel>
-unsigned int residentBlocks(Kernel* kernel, unsigned int all, int block = kQueryBlock) {
-  static std::map<std::pair<const void*, int>, int> per_sm;
-  const auto key = std::make_pair(reinterpret_cast<const void*>(kernel), block);
+unsigned int residentBlocks(Kernel* kernel, unsigned int all) {
+  static std::map<const void*, int> per_sm;
+  const void* key = reinterpret_cast<const void*>(kernel);
   auto it = per_sm.find(key);
   if (it == per_sm.end()) {
     int b = 0;
-    CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, block, 0));
+    CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, kQueryBlock, 0));
     it = per_sm.emplace(key, std::max(b, 1)).first;
   }
   return static_cast<unsigned int>(std::min<unsigned long long>(
       all, static_cast<unsigned long long>(it->second) * g_num_sms));
-}
-
-/// KDET_FCL_CUDA_RESIDENT_GRIDS=0 launches the plane filter and the exact-test kernels with 8 and
-/// 16 blocks per SM, as before 2026-11-24, instead of the blocks they keep resident (read at every
-/// query).
-bool residentGrids() { return detail::switchKnob("KDET_FCL_CUDA_RESIDENT_GRIDS", true); }
-
-/// The grid of a kernel that strides over a device-side count of pairs (the plane filter, the
-/// exact tests): the blocks it keeps resident, at most `most` (residentBlocks), so that no wave
-/// of blocks starts only to find nothing left (for the few hundred to few thousand pairs that
-/// reach an exact kernel, 3-4 such waves took 17-40 us, ncu); `most` itself with
-/// KDET_FCL_CUDA_RESIDENT_GRIDS=0.
-template <class Kernel>
-unsigned int strideGrid(Kernel* kernel, unsigned int most, int block) {
-  return residentGrids() ? residentBlocks(kernel, most, block) : most;
 }
 
 template <class S, class Kernel>
@@ -3000,16 +2985,15 @@ int filterMinBlocks() {
 /// Read at every query.
 bool filterDecides() { return detail::switchKnob("KDET_FCL_CUDA_FILTER_DECIDES", true); }
 
-/// Launches the plane filter (grid-stride over the device-side candidate count: the blocks of 256
-/// threads it keeps resident, at most 8 per SM: strideGrid); a self query's pairs (self) go to
-/// `out` as selfExactKernel emits them.
+/// Launches the plane filter (grid-stride over the device-side candidate count: 8 blocks of 256
+/// threads per SM); a self query's pairs (self) go to `out` as selfExactKernel emits them.
 template <class S>
 void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
                        const std::uint32_t* ta, const Vec3<S>* vb, const std::uint32_t* tb,
                        const PairSink& surv, const PairSink& out, bool self, std::uint32_t split,
                        int cat_shift, bool decides) {
+  const auto blocks = static_cast<unsigned int>(8 * g_num_sms);
   const auto run = [&](auto kernel) {
-    const unsigned int blocks = strideGrid(kernel, 8u * g_num_sms, kFilterBlock);
     kernel<<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity, va, ta, vb, tb,
                                            surv, out, self, split, cat_shift);
   };
@@ -3084,7 +3068,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const double eps_tmag =
       std::fabs(rp.a_to_b.t.x) + std::fabs(rp.a_to_b.t.y) + std::fabs(rp.a_to_b.t.z);
   const auto una = static_cast<std::uint32_t>(na), unb = static_cast<std::uint32_t>(nb);
-  const unsigned int exact_most = static_cast<unsigned int>(16 * g_num_sms);
+  const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
   const bool decides = filter && filterDecides();
   ctx.profile.filter_decides = decides;
@@ -3136,11 +3120,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     ctx.markRound(round.serial, 2);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
-      const auto kernel = interExactKernel<S, K>;
-      const unsigned int blocks = strideGrid(kernel, exact_most, kQueryBlock);
-      ctx.profile.exact_blocks = blocks;
-      kernel<<<blocks, kQueryBlock, 0, s>>>(in.pairs, in.count, in.capacity, va, av.t, bv.v, bv.t,
-                                            out);
+      interExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
+          in.pairs, in.count, in.capacity, va, av.t, bv.v, bv.t, out);
     });
     return filter;
   };
@@ -3163,7 +3144,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   ctx.record(1);
   const cudaStream_t s = ctx.stream;
   const auto un = static_cast<std::uint32_t>(n);
-  const unsigned int exact_most = static_cast<unsigned int>(16 * g_num_sms);
+  const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
   const bool decides = filter && filterDecides();
   ctx.profile.filter_decides = decides;
@@ -3233,11 +3214,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     ctx.markRound(round.serial, 2);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
-      const auto kernel = selfExactKernel<S, K>;
-      const unsigned int blocks = strideGrid(kernel, exact_most, kQueryBlock);
-      ctx.profile.exact_blocks = blocks;
-      kernel<<<blocks, kQueryBlock, 0, s>>>(in.pairs, in.count, in.capacity, mv.v, mv.t, split,
-                                            bitsFor(n), out);
+      selfExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
+          in.pairs, in.count, in.capacity, mv.v, mv.t, split, bitsFor(n), out);
     });
     return filter;
   };
@@ -3356,7 +3334,6 @@ void readEveryKnob() {
   (void)capacityKnob();
   (void)planeFilterOn();
   (void)filterDecides();
-  (void)residentGrids();
   (void)countOrderAllowed();
   (void)segmentMax();
   (void)roundCandidateLimit(1);

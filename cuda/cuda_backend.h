@@ -74,10 +74,10 @@
 // result the caller keeps across frames (intersectSelf/intersectMeshes/intersectAll into a
 // result), from 4 chunks and where the result held at least half as many pairs, 4 threads of a
 // pool kept by the backend copy the chunks into the result's own storage
-// (staging::pooledThreads; KDET_FCL_CUDA_DOWNLOAD_THREADS=n, 1..64, sets the threads). Every query first
-// reads every knob (checkKnobs()): a value a knob does not accept (not 0 or 1 for a switch, not
-// one of its numbers, out of its range, "abc") throws InvalidInputError naming the variable,
-// before any work; unset or empty means the default.
+// (staging::pooledThreads; KDET_FCL_CUDA_DOWNLOAD_THREADS=n, 1..64, sets the threads). Every
+// query first reads every knob (checkKnobs()): a value a knob does not accept (not 0 or 1 for a
+// switch, not one of its numbers, out of its range, "abc") throws InvalidInputError naming the
+// variable, before any work; unset or empty means the default.
 //
 // Self queries of unchanged meshes: a self query's pairs depend on the geometry, not the pose.
 // A self query that finds the same device geometry as the mesh's previous self query keeps its
@@ -214,9 +214,6 @@ struct QueryProfile {
   bool filter_decides = false;  ///< the plane filter finished the pairs its filters decide
                                 ///< (KDET_FCL_CUDA_FILTER_DECIDES; Predicate::Exact with the
                                 ///< filter on)
-  unsigned int exact_blocks = 0;  ///< blocks of the last exact-test kernel launched: the blocks
-                                  ///< it keeps resident (KDET_FCL_CUDA_RESIDENT_GRIDS, default),
-                                  ///< or 16 per SM (=0)
   bool staged_pairs = false;  ///< the warp-wide phase 1 (warp scan, cells' pairs) emitted its
                               ///< candidates through a warp's stage in shared memory
                               ///< (KDET_FCL_CUDA_STAGE_PAIRS; the tile scan's never are)

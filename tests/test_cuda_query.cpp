@@ -427,7 +427,6 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_DOWNLOAD_CHUNK", {"4096", "4294967296"}, {"4095", "4294967297", "1M"}},
       {"KDET_FCL_CUDA_UPLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
       {"KDET_FCL_CUDA_DOWNLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
-      {"KDET_FCL_CUDA_RESIDENT_GRIDS", on_off, not_on_off},
   };
   for (const Knob& k : knobs) {
     for (const char* unset : {static_cast<const char*>(nullptr), ""}) {
@@ -873,9 +872,7 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   // The filter can be switched off per query (KDET_FCL_CUDA_PLANE_FILTER=0), or made to only drop
   // pairs (KDET_FCL_CUDA_FILTER_DECIDES=0); every way, and with tiny buffers (every buffer
   // overflows, the survivors' too), the pairs are the CPU's. Deciding, the filter leaves fewer
-  // pairs to the exact kernel than dropping alone. The filter and the exact kernels run the
-  // blocks they keep resident (fewer than 16 per SM for the exact kernels), or, with
-  // KDET_FCL_CUDA_RESIDENT_GRIDS=0, 8 and 16 per SM: the same pairs.
+  // pairs to the exact kernel than dropping alone.
   KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(80, 4.0, 1.0, 0.03, 1.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 48, 24));
@@ -887,36 +884,22 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   struct Mode {
     const char* filter;
     const char* decides;
-    const char* resident;
   };
-  [[maybe_unused]] int sms = 0;
-#if KDET_FCL_TEST_HAVE_CUDA
-  ASSERT_EQ(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, 0), cudaSuccess);
-#endif
   [[maybe_unused]] std::size_t dropping[3] = {0, 0, 0};  // filter 1, decides 0 (run first)
-  for (const Mode mode : {Mode{"0", "1", "1"}, Mode{"1", "0", "1"}, Mode{"1", "1", "1"},
-                          Mode{"0", "1", "0"}, Mode{"1", "1", "0"}}) {
+  for (const Mode mode : {Mode{"0", "1"}, Mode{"1", "0"}, Mode{"1", "1"}}) {
     [[maybe_unused]] std::size_t exact[3] = {0, 0, 0};  // uncapped: inter, self, sheets
     for (const char* cap : {"", "2", "50"}) {
       kdet_test::ScopedEnv f("KDET_FCL_CUDA_PLANE_FILTER", mode.filter),
           d("KDET_FCL_CUDA_FILTER_DECIDES", mode.decides),
-          r("KDET_FCL_CUDA_RESIDENT_GRIDS", mode.resident),
           c("KDET_FCL_CUDA_PAIR_CAPACITY", cap);
       const std::string what = std::string("filter ") + mode.filter + " decides " +
-                               mode.decides + " resident grids " + mode.resident + " cap '" +
-                               cap + "'";
+                               mode.decides + " cap '" + cap + "'";
 #if KDET_FCL_TEST_HAVE_CUDA
       cuda::setProfiling(true);
 #endif
       EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs, cpu_inter) << what;
 #if KDET_FCL_TEST_HAVE_CUDA
       const cuda::QueryProfile p = cuda::lastQueryProfile();
-      if (*mode.resident == '1') {
-        EXPECT_GT(p.exact_blocks, 0u) << what;
-        EXPECT_LT(p.exact_blocks, 16u * unsigned(sms)) << what;
-      } else {
-        EXPECT_EQ(p.exact_blocks, 16u * unsigned(sms)) << what;
-      }
       EXPECT_EQ(p.filter_decides, *mode.filter == '1' && *mode.decides == '1') << what;
       if (*mode.filter == '0') EXPECT_EQ(p.exact_tests, p.candidates) << what;
       else EXPECT_LT(p.exact_tests, p.candidates) << what;
@@ -934,7 +917,7 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
     }
 #if KDET_FCL_TEST_HAVE_CUDA
     if (*mode.filter == '1' && *mode.decides == '0') std::copy(exact, exact + 3, dropping);
-    if (*mode.filter == '1' && *mode.decides == '1' && *mode.resident == '1') {
+    if (*mode.filter == '1' && *mode.decides == '1') {
       // The cloth on the sphere crosses it transversally: its pairs are decided by the filter.
       EXPECT_LT(exact[0], dropping[0] / 2) << "inter";
       EXPECT_LE(exact[1], dropping[1]) << "self";
@@ -1954,8 +1937,9 @@ TYPED_TEST(CudaQueryTyped, ResultsKeptAcrossFramesGetEachFramesPairs) {
   // at least half as many: staging::pooledThreads) give, frame after frame, exactly the by-value
   // calls' results, whatever the result held before: more pairs (95,330 inter pairs, then 3,934),
   // fewer, none, other flags. Pair counts of the inter query over the frames (float): 3,934,
-  // 3,960, 95,330, 3,934, 0, 95,330, 3,960. 4 KiB read-back chunks (512 pairs), so that the pooled path
-  // runs at these sizes; by 4 threads, then by 1. Then max_pairs, and the CPU backend.
+  // 3,960, 95,330, 3,934, 0, 95,330, 3,960. 4 KiB read-back chunks (512 pairs), so that the
+  // pooled path runs at these sizes; by 4 threads, then by 1. Then max_pairs, and the CPU
+  // backend.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;

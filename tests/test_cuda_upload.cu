@@ -3,8 +3,8 @@
 // threads and the chunk size. Download: every element arrives, in order, in whole-element chunks,
 // and a throwing consumer leaves cleanly; into a kept vector (downloadInto) by several threads of
 // a persistent pool (pooledDownload, CopyPool), the same elements, old contents replaced. The
-// knobs are parsed and bounded, and a value out of bounds throws. Pinned uploads (a registered range's whole pages by DMA, its ends staged) bring
-// every byte too. The copy tests skip without a device; the knob, page and empty-range tests need
+// knobs are parsed and bounded, and a value out of bounds throws. Pinned uploads (a registered
+// range's whole pages by DMA, its ends staged) bring every byte too. The copy tests skip without a device; the knob, page and empty-range tests need
 // none.
 
 #include <cuda_runtime.h>
@@ -330,7 +330,9 @@ TEST(CopyPool, RunsTheWorkOnTheThreadsAskedForAndKeepsThem) {
     most = std::max(most, threads);
     std::atomic<int> ran{0};
     std::vector<std::thread::id> ids(8);
-    const std::function<void()> work = [&] { ids[std::size_t(ran.fetch_add(1))] = std::this_thread::get_id(); };
+    const std::function<void()> work = [&] {
+      ids[std::size_t(ran.fetch_add(1))] = std::this_thread::get_id();
+    };
     pool.run(threads, work);
     EXPECT_EQ(ran.load(), threads);
     std::sort(ids.begin(), ids.begin() + threads);
@@ -437,7 +439,8 @@ TEST(PooledDownload, ThreadsKnobAndWhenThePoolRuns) {
   ScopedEnv t("KDET_FCL_CUDA_DOWNLOAD_THREADS", nullptr);
   ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", nullptr);
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-  EXPECT_EQ(downloadThreads(1000), int(std::min<unsigned>(kdet_fcl::staging::kDownloadThreads, hw)));
+  EXPECT_EQ(downloadThreads(1000),
+            int(std::min<unsigned>(kdet_fcl::staging::kDownloadThreads, hw)));
   // 256 KiB chunks of 8-byte pairs: from 4 chunks (131,072 pairs), into a destination that held
   // at least half as many.
   using kdet_fcl::staging::pooledThreads;
