@@ -77,18 +77,22 @@ inline std::size_t downloadChunk() {
   return chunkFrom("KDET_FCL_CUDA_DOWNLOAD_CHUNK", kDownloadChunk);
 }
 
-/// Host threads for `chunks` chunks: KDET_FCL_CUDA_UPLOAD_THREADS (1..64; any other value
-/// throws), else one per chunk up to kMaxUploadThreads and the hardware's thread count; never
-/// more than the chunks.
-inline int uploadThreads(std::size_t chunks) {
-  long long t =
-      static_cast<long long>(detail::numberKnob("KDET_FCL_CUDA_UPLOAD_THREADS", 1, 64, 0));
+/// Host threads for `chunks` chunks: the knob `name` (1..64; any other value throws), else up
+/// to `most` and the hardware's thread count; never more than the chunks, at least one.
+inline int threadsFor(const char* name, int most, std::size_t chunks) {
+  long long t = static_cast<long long>(detail::numberKnob(name, 1, 64, 0));
   if (t == 0) {
     const unsigned hw = std::thread::hardware_concurrency();
-    t = std::min<long long>(kMaxUploadThreads, hw == 0 ? 1 : hw);
+    t = std::min<long long>(most, hw == 0 ? 1 : hw);
   }
-  const long long most = static_cast<long long>(std::max<std::size_t>(chunks, 1));
-  return static_cast<int>(std::max<long long>(1, std::min(t, most)));
+  const long long per_chunk = static_cast<long long>(std::max<std::size_t>(chunks, 1));
+  return static_cast<int>(std::max<long long>(1, std::min(t, per_chunk)));
+}
+
+/// Host threads of an upload of `chunks` chunks: KDET_FCL_CUDA_UPLOAD_THREADS, else one per
+/// chunk up to kMaxUploadThreads (threadsFor).
+inline int uploadThreads(std::size_t chunks) {
+  return threadsFor("KDET_FCL_CUDA_UPLOAD_THREADS", kMaxUploadThreads, chunks);
 }
 
 /// Vertex arrays from this size up may be uploaded straight from their own buffer, registered as
@@ -283,19 +287,11 @@ cudaError_t stagedDownload(const T* src, std::size_t count, T* stage, cudaStream
   return cudaSuccess;
 }
 
-/// Host threads of a pooled download of `chunks` chunks: KDET_FCL_CUDA_DOWNLOAD_THREADS (1..64;
-/// any other value throws), else kDownloadThreads and at most the hardware's thread count; never
-/// more than the chunks.
+/// Host threads of a pooled download of `chunks` chunks: KDET_FCL_CUDA_DOWNLOAD_THREADS, else up
+/// to kDownloadThreads (threadsFor).
 constexpr int kDownloadThreads = 4;  // 4 beat 2 and 8 at 445,614 pairs, 8 level at 1M (H100)
 inline int downloadThreads(std::size_t chunks) {
-  long long t =
-      static_cast<long long>(detail::numberKnob("KDET_FCL_CUDA_DOWNLOAD_THREADS", 1, 64, 0));
-  if (t == 0) {
-    const unsigned hw = std::thread::hardware_concurrency();
-    t = std::min<long long>(kDownloadThreads, hw == 0 ? 1 : hw);
-  }
-  const long long most = static_cast<long long>(std::max<std::size_t>(chunks, 1));
-  return static_cast<int>(std::max<long long>(1, std::min(t, most)));
+  return threadsFor("KDET_FCL_CUDA_DOWNLOAD_THREADS", kDownloadThreads, chunks);
 }
 
 /// A pooled download pays for its threads only from this many chunks on (4: 1 MiB with the
