@@ -763,16 +763,10 @@ std::vector<TrianglePair> runQuery(std::size_t n_hint, int a_bits, Traverse trav
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair layout");
     // The backend's read-back (cuda/staged_upload.h), so both pay the same transfer.
     auto* h = static_cast<TrianglePair*>(s.host_pairs.reserve(np * sizeof(uint2)));
-    const auto* from = reinterpret_cast<const TrianglePair*>(s.unpacked.p);
-    if (keep != nullptr) {  // into kept storage, as the backend's results kept across frames
-      BVH_TRY(kdet_fcl::staging::downloadInto(from, np, h, 0, s.copy_pool, out));
-    } else {
-      out.reserve(np);
-      BVH_TRY(kdet_fcl::staging::stagedDownload(from, np, h, 0,
-                                                [&](const TrianglePair* first, std::size_t k) {
-                                                  out.insert(out.end(), first, first + k);
-                                                }));
-    }
+    // Into the kept storage by several threads where that pays, as the backend's results kept
+    // across frames; a new result's empty vector goes by one thread.
+    BVH_TRY(kdet_fcl::staging::downloadInto(reinterpret_cast<const TrianglePair*>(s.unpacked.p),
+                                            np, h, 0, s.copy_pool, out));
   }
   g_timer.mark(&g_timer.t.output_ms);
   return out;

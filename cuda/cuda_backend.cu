@@ -2651,18 +2651,13 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     if (dev == nullptr) {
       // Through pinned memory (a pageable device->host copy runs at a fraction of the bus rate),
       // in chunks, each appended to the result as soon as it has arrived (staged_upload.h), or,
-      // into storage the caller keeps, copied by several threads where that pays.
+      // into storage the caller keeps, copied by several threads where that pays (a new
+      // result's empty vector always goes by the one thread: staging::downloadInto).
       ctx.readback.reserve(m * sizeof(TrianglePair));
       auto* const from = reinterpret_cast<const TrianglePair*>(in);
       auto* const stage = static_cast<TrianglePair*>(ctx.readback.data());
-      if (parts == nullptr && keep != nullptr) {
+      if (parts == nullptr) {
         CUDA_TRY(staging::downloadInto(from, m, stage, s, ctx.copy_pool, res.pairs));
-      } else if (parts == nullptr) {
-        res.pairs.reserve(m);
-        CUDA_TRY(staging::stagedDownload(from, m, stage, s,
-                                         [&](const TrianglePair* first, std::size_t k) {
-                                           res.pairs.insert(res.pairs.end(), first, first + k);
-                                         }));
       } else {
         // The three runs' ends (the kind counts arrived before the first chunk).
         std::size_t end0 = 0, end1 = 0;
