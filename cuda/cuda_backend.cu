@@ -1399,37 +1399,95 @@ __global__ void unpackPairsKernel(std::uint32_t m, std::uint32_t limit,
   deliverPair(k, keys[k], limit, b_bits, out, a_bits, kinds);
 }
 
+/// The sizes of the counting order's steps (scatterPairsKernel, rankPairsKernel,
+/// copyPairsOutKernel): n pairs to order, the first `unpack` places delivered, of which the
+/// first `give` written. From the host after it has read the pass's counts back (w null), or,
+/// queued before that read-back (one trip, runQuery), from the pass's counters `w` on the device:
+/// then every step does nothing unless the pass stored everything it found (the host's own test
+/// before it takes the pairs: passFits) and no segment went over its limit, so a pass that must
+/// rerun or sort leaves its keys as they were; the host, reading the same counters, comes to the
+/// same answer (resolve runs on both).
+struct OrderSizes {
+  std::uint32_t n = 0, unpack = 0, give = 0;
+  const unsigned long long* w = nullptr;
+  unsigned long long cand_cap = 0, surv_cap = 0, cap = 0;  // passFits
+  unsigned long long sorted_cap = 0;  // the grouped keys' buffer (pairs_sorted)
+  unsigned long long max_pairs = 0;   // QueryOptions::max_pairs (0: all)
+  unsigned long long give_cap = 0;    // the pairs to write at most (a caller's device buffer)
+  bool rounds = false;  // the pass ran in several rounds (roundEndKernel's counters)
+  bool filtered = false;  // the plane filter ran
+  bool kinds = false;  // two meshes hashed as one: every pair is delivered, to count its kind
+};
+
+/// Whether a pass's counters `w` show everything it found stored (runQuery grows and reruns
+/// otherwise).
+__host__ __device__ __forceinline__ bool passFits(const unsigned long long* w,
+                                                  const OrderSizes& z) {
+  const unsigned long long nc = z.rounds ? w[kMaxCands] : w[kCandCount];
+  const unsigned long long ns = z.filtered ? (z.rounds ? w[kMaxSurv] : w[kSurvCount]) : nc;
+  return nc <= z.cand_cap && w[kPairCount] <= z.cap && (!z.filtered || ns <= z.surv_cap);
+}
+
+/// Fills n, unpack and give from the counters when z.w is set; false when the counting order
+/// must not run from them (see OrderSizes).
+__host__ __device__ __forceinline__ bool resolve(OrderSizes& z) {
+  if (z.w == nullptr) return true;
+  const unsigned long long* w = z.w;
+  if (!passFits(w, z) || w[kBigSegment] != 0 || w[kPairCount] > z.sorted_cap) return false;
+  const unsigned long long n = w[kPairCount];
+  const unsigned long long m = z.max_pairs > 0 && n > z.max_pairs ? z.max_pairs : n;
+  const unsigned long long give = m < z.give_cap ? m : z.give_cap;
+  z.n = static_cast<std::uint32_t>(n);
+  z.give = static_cast<std::uint32_t>(give);
+  z.unpack = static_cast<std::uint32_t>(z.kinds ? m : give);
+  return true;
+}
+
 /// The counting order, step 2 (after the exclusive scan of the segments' counts, `seg`): each
 /// of the n keys goes to its segment's next free place in `grouped`; `seg[g]` ends as the end of
 /// segment g (the start of g + 1).
-__global__ void scatterPairsKernel(std::uint32_t n, const unsigned long long* __restrict__ keys,
+__global__ void scatterPairsKernel(OrderSizes z, const unsigned long long* __restrict__ keys,
                                    int shift, unsigned int* __restrict__ seg,
                                    unsigned long long* __restrict__ grouped) {
-  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-  if (k >= n) return;
-  const unsigned long long u = keys[k];
-  grouped[atomicAdd(seg + (u >> shift), 1u)] = u;
+  if (!resolve(z)) return;
+  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.n;
+       k += gridDim.x * blockDim.x) {
+    const unsigned long long u = keys[k];
+    grouped[atomicAdd(seg + (u >> shift), 1u)] = u;
+  }
 }
 
 /// The counting order, step 3: each key's place is its segment's start plus the number of keys
 /// of the segment (at most segmentMax()) below it (equal keys, which a query never emits, would
-/// be ranked by their place in `grouped`, so no place is taken twice); the first m places are
-/// delivered (deliverPair).
-__global__ void rankPairsKernel(std::uint32_t n, std::uint32_t m, std::uint32_t limit,
-                                const unsigned long long* __restrict__ grouped, int shift,
-                                const unsigned int* __restrict__ seg, int b_bits,
+/// be ranked by their place in `grouped`, so no place is taken twice); the first `unpack` places
+/// are delivered (deliverPair), the first `give` of them written.
+__global__ void rankPairsKernel(OrderSizes z, const unsigned long long* __restrict__ grouped,
+                                int shift, const unsigned int* __restrict__ seg, int b_bits,
                                 uint2* __restrict__ out, int a_bits, unsigned long long* kinds) {
-  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-  if (k >= n) return;
-  const unsigned long long u = grouped[k];
-  const auto g = static_cast<std::uint32_t>(u >> shift);
-  const std::uint32_t first = g > 0 ? seg[g - 1] : 0, end = seg[g];
-  std::uint32_t place = first;
-  for (std::uint32_t j = first; j < end; ++j) {
-    const unsigned long long v = grouped[j];
-    place += (v < u || (v == u && j < k)) ? 1u : 0u;
+  if (!resolve(z)) return;
+  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.n;
+       k += gridDim.x * blockDim.x) {
+    const unsigned long long u = grouped[k];
+    const auto g = static_cast<std::uint32_t>(u >> shift);
+    const std::uint32_t first = g > 0 ? seg[g - 1] : 0, end = seg[g];
+    std::uint32_t place = first;
+    for (std::uint32_t j = first; j < end; ++j) {
+      const unsigned long long v = grouped[j];
+      place += (v < u || (v == u && j < k)) ? 1u : 0u;
+    }
+    if (place < z.unpack) deliverPair(place, u, z.give, b_bits, out, a_bits, kinds);
   }
-  if (place < m) deliverPair(place, u, limit, b_bits, out, a_bits, kinds);
+}
+
+/// One trip, the last step: the `give` pairs delivered, straight into the page-locked stage of
+/// the host (mapped: the kernel's writes cross the bus), when they are at most `most`; else the
+/// host reads them back in chunks after the counts (runQuery).
+__global__ void copyPairsOutKernel(OrderSizes z, const uint2* __restrict__ from,
+                                   uint2* __restrict__ stage, std::uint32_t most) {
+  if (!resolve(z) || z.give > most) return;
+  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.give;
+       k += gridDim.x * blockDim.x)
+    stage[k] = from[k];
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1461,16 +1519,26 @@ class PinnedBuffer {
     const std::size_t want = bytes + bytes / 8 + 64;
     CUDA_TRY(cudaMallocHost(&p_, want));
     cap_ = want;
+    // Page-locked memory is mapped into the device's address space where the device addresses
+    // memory as one space with the host (every 64-bit platform CUDA 13 supports); else kernels
+    // cannot write here (deviceData() null).
+    if (cudaHostGetDevicePointer(&d_, p_, 0) != cudaSuccess) {
+      (void)cudaGetLastError();
+      d_ = nullptr;
+    }
   }
   void release() noexcept {
     if (p_ != nullptr) (void)cudaFreeHost(p_);
-    p_ = nullptr;
+    p_ = d_ = nullptr;
     cap_ = 0;
   }
   void* data() const { return p_; }
+  /// The same memory as kernels address it, or null where they cannot.
+  void* deviceData() const { return d_; }
 
  private:
   void* p_ = nullptr;
+  void* d_ = nullptr;
   std::size_t cap_ = 0;
 };
 
@@ -1633,6 +1701,7 @@ struct Context {
   PinnedBuffer host_small;  // 3 BuildInfo + entry total + cell total + 2 kind counts + the
                             // kPairCountWords counters of the last pass
   PinnedBuffer readback;    // sorted pairs on their way into the result
+  std::size_t last_host_pairs = 0;  // the pairs of the last query into a host result (runQuery)
   staging::CopyPool copy_pool;  // the threads of pooled read-backs (results kept by the caller)
 
   std::list<CachedMesh<float>> meshes_f;
@@ -2389,6 +2458,13 @@ bool planeFilterOn() { return detail::switchKnob("KDET_FCL_CUDA_PLANE_FILTER", t
 bool countOrderAllowed() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", true); }
 bool countOrderForced() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", false); }
 
+/// Whether a query pass queues the counting order of its pairs (and, for a host result of at
+/// most one read-back chunk, their copy into the page-locked stage) before the host reads the
+/// pass's counts back, each step deciding on the device whether the pass allows it (OrderSizes),
+/// so that the host waits once per pass, not twice: KDET_FCL_CUDA_ONE_TRIP (default on; needs
+/// the counting order, KDET_FCL_CUDA_COUNT_ORDER not 0). Read at every query.
+bool oneTripOn() { return detail::switchKnob("KDET_FCL_CUDA_ONE_TRIP", true); }
+
 /// The most pairs of one segment that the counting order ranks (each pair of a segment reads the
 /// whole segment): kSegmentMax, or KDET_FCL_CUDA_COUNT_ORDER_SEGMENT (1 .. kSegmentMaxLimit).
 /// Read at every query.
@@ -2519,8 +2595,57 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   const bool staged = stagedPairs();
   ctx.profile.staged_pairs = staged;
   if (counting) ctx.segs.reserve(segments);
+  unsigned long long* const kind_counts = kinds ? ctx.kindCounts() : nullptr;
+  // Where the counting order delivers the pairs: the caller's device buffer, or the key buffer
+  // the order no longer needs (read at each use: the buffer may have grown).
+  auto delivery = [&] {
+    return reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr)
+                                                   : static_cast<void*>(ctx.pairs.data()));
+  };
+  // The counting order: the segments' starts (in place), each key into its segment, its rank
+  // there (the order of the sort, in three light kernels instead of the sort's passes), sized
+  // by z (OrderSizes: from the host, or from the pass's counters).
+  const int order_shift = b_bits + seg_shift;
+  auto countingOrder = [&](const OrderSizes& z, unsigned int blocks) {
+    unsigned int* const seg = ctx.segs.data();
+    cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
+      return cub::DeviceScan::ExclusiveSum(tmp, bytes, seg, seg, static_cast<int>(segments), s);
+    });
+    scatterPairsKernel<<<blocks, 256, 0, s>>>(z, ctx.pairs.data(), order_shift, seg,
+                                              ctx.pairs_sorted.data());
+    checkLaunch();
+    rankPairsKernel<<<blocks, 256, 0, s>>>(z, ctx.pairs_sorted.data(), order_shift, seg, b_bits,
+                                           delivery(), a_bits, kind_counts);
+    checkLaunch();
+  };
+  // One trip (oneTripOn): each pass queues the counting order behind its exact tests, and a
+  // host result of at most one read-back chunk (copy_most pairs) its copy into the stage, all
+  // sized on the device from the pass's counters (trip), before the counts come back. Not for a
+  // host result when the last one took more than kOneTripMaxChunks chunks: the host then
+  // enqueues a copy and an event per chunk (a few us each) after the counts, which the order's
+  // kernels cover when they are queued after the counts instead.
+  const std::size_t chunk_pairs = std::min<std::size_t>(
+      std::max<std::size_t>(1, staging::downloadChunk() / sizeof(TrianglePair)), 0x7FFFFFFF);
+  const bool one_trip =
+      counting && oneTripOn() &&
+      (dev != nullptr || ctx.last_host_pairs <= kOneTripMaxChunks * chunk_pairs);
+  std::uint32_t copy_most = 0;
+  if (one_trip && dev == nullptr) {
+    copy_most = static_cast<std::uint32_t>(chunk_pairs);
+    ctx.readback.reserve(std::size_t(copy_most) * sizeof(TrianglePair));
+    if (ctx.readback.deviceData() == nullptr) copy_most = 0;  // kernels cannot write there
+  }
+  OrderSizes trip;  // the last pass's capacities and counters (passFits; one_trip's sizes)
   while (true) {
     ++passes;
+    // One trip: the grouped keys' buffer (the survivors') holds every pair the pass can store,
+    // so that no pass that stored all it found skips the order on the device for want of room
+    // there (the host could not count them after it: the pass's scan has run on the counts).
+    if (one_trip && ctx.pairs_sorted.capacity() < cap) {
+      ctx.pairs_sorted.reserve(cap);
+      surv_cap = ctx.pairs_sorted.capacity();
+      if (knob > 0) surv_cap = std::min(surv_cap, knob);
+    }
     CUDA_TRY(cudaMemsetAsync(w, 0, kPairCountWords * sizeof(unsigned long long), s));
     if (counting)
       CUDA_TRY(cudaMemsetAsync(ctx.segs.data(), 0, segments * sizeof(unsigned int), s));
@@ -2538,6 +2663,31 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       checkLaunch();
       if (rounds > 1) {
         roundEndKernel<<<1, 1, 0, s>>>(w);
+        checkLaunch();
+      }
+    }
+    trip = OrderSizes{};
+    trip.w = w;
+    trip.cand_cap = cand_cap;
+    trip.surv_cap = surv_cap;
+    trip.cap = cap;
+    trip.sorted_cap = ctx.pairs_sorted.capacity();
+    trip.max_pairs = options.max_pairs;
+    trip.give_cap = dev != nullptr ? dev->capacity : ~0ull;
+    trip.rounds = rounds > 1;
+    trip.filtered = filtered;
+    trip.kinds = kinds;
+    if (one_trip) {
+      ctx.record(2);
+      // A grid for the most keys the pass can have stored; its threads loop over the n there.
+      countingOrder(trip, std::min<unsigned int>(blocksFor(std::min(cap, trip.sorted_cap), 256),
+                                                 static_cast<unsigned int>(8 * g_num_sms)));
+      if (copy_most > 0) {
+        copyPairsOutKernel<<<std::min<unsigned int>(blocksFor(copy_most, 256),
+                                                    static_cast<unsigned int>(2 * g_num_sms)),
+                             256, 0, s>>>(trip, delivery(),
+                                          static_cast<uint2*>(ctx.readback.deviceData()),
+                                          copy_most);
         checkLaunch();
       }
     }
@@ -2559,7 +2709,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     ctx.profile.rounds = static_cast<int>(rounds);
     ctx.profile.cell_rounds = static_cast<int>(plan.staged ? plan.first_rounds : 0);
     ctx.profile.cell_candidates = h[kCellCands];
-    if (nc <= cand_cap && n <= cap && (!filtered || ns <= surv_cap)) break;
+    if (passFits(h, trip)) break;
     // The device counted everything it could not store: grow and rerun (no pair is dropped).
     if (nc > 0x7FFFFFFFull || n > 0x7FFFFFFFull)
       throw Error("CUDA backend: more than 2^31-1 candidate pairs (" + std::to_string(nc) + ")");
@@ -2590,7 +2740,11 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       cap = ctx.pairs.capacity();
     }
   }
-  ctx.record(2);
+  // Whether the last pass's one trip ordered the pairs (and the device saw what the host sees).
+  OrderSizes got = trip;
+  got.w = h;
+  const bool tripped = one_trip && resolve(got);
+  if (!tripped) ctx.record(2);
   QueryResult res;
   if (keep != nullptr) res.pairs = std::move(*keep);  // (its old pairs: replaced below)
   std::size_t m = n;
@@ -2600,64 +2754,69 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   const std::size_t give = dev != nullptr ? std::min(m, dev->capacity) : m;
   if (dev != nullptr) dev->count = m;
   // Ordered by counting when no segment holds more than segmentMax() pairs and there are enough
-  // pairs (or KDET_FCL_CUDA_COUNT_ORDER=1), else sorted.
+  // pairs (or KDET_FCL_CUDA_COUNT_ORDER=1), else sorted; with one trip, counted on the device
+  // or (a segment too large: the counts are scanned already) sorted.
   const bool counted =
-      counting && h[kBigSegment] == 0 && (n >= kCountOrderMinPairs || countOrderForced());
+      one_trip ? tripped
+               : counting && h[kBigSegment] == 0 &&
+                     (n >= kCountOrderMinPairs || countOrderForced());
+  // The one trip copied the pairs into the stage already.
+  const bool from_stage = tripped && dev == nullptr && copy_most > 0 && m <= copy_most;
   unsigned long long* in = ctx.pairs.data();  // receives the pairs in TrianglePair layout
   if (give > 0 || (kinds && m > 0)) {
     ctx.profile.pairs_counted = counted;
-    ctx.pairs_sorted.reserve(n);
+    ctx.profile.one_trip = tripped;
+    ctx.profile.one_trip_copy = from_stage;
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
     // Into the caller's device buffer, or the key buffer the order no longer needs (`in`); the
     // kinds are counted over all m, and their counts come back before the first chunk of a host
     // result's pairs (same stream), so that the three results are sized exactly, as a single
     // query's is.
     const std::size_t unpack = kinds ? m : give;
-    auto to = [&] {
-      return reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : in);
-    };
-    unsigned long long* const kind_counts = kinds ? ctx.kindCounts() : nullptr;
-    if (counted) {
-      // The segments' starts (in place), each key into its segment, its rank there: the
-      // order of the sort, in three light kernels instead of the sort's passes.
-      unsigned int* const seg = ctx.segs.data();
-      cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-        return cub::DeviceScan::ExclusiveSum(tmp, bytes, seg, seg, static_cast<int>(segments), s);
-      });
-      const int shift = b_bits + seg_shift;
-      scatterPairsKernel<<<blocksFor(n, 256), 256, 0, s>>>(static_cast<std::uint32_t>(n),
-                                                           ctx.pairs.data(), shift, seg,
-                                                           ctx.pairs_sorted.data());
-      checkLaunch();
-      rankPairsKernel<<<blocksFor(n, 256), 256, 0, s>>>(
-          static_cast<std::uint32_t>(n), static_cast<std::uint32_t>(unpack),
-          static_cast<std::uint32_t>(give), ctx.pairs_sorted.data(), shift, seg, b_bits, to(),
-          a_bits, kind_counts);
+    if (tripped) {
+      if (kinds) {  // (counted on the device before the counters came back)
+        ctx.hostKinds()[0] = h[kKindCounts];
+        ctx.hostKinds()[1] = h[kKindCounts + 1];
+      }
     } else {
-      cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
-      const int bits = a_bits + b_bits + (kinds ? 2 : 0);
-      cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
-        return cub::DeviceRadixSort::SortKeys(tmp, bytes, keys, static_cast<int>(n), 0, bits, s);
-      });
-      in = keys.Alternate();  // the sorted keys are in Current()
-      unpackPairsKernel<<<blocksFor(unpack, 256), 256, 0, s>>>(
-          static_cast<std::uint32_t>(unpack), static_cast<std::uint32_t>(give), keys.Current(),
-          b_bits, to(), a_bits, kind_counts);
+      ctx.pairs_sorted.reserve(n);
+      if (counted) {
+        OrderSizes z;
+        z.n = static_cast<std::uint32_t>(n);
+        z.unpack = static_cast<std::uint32_t>(unpack);
+        z.give = static_cast<std::uint32_t>(give);
+        countingOrder(z, blocksFor(n, 256));
+      } else {
+        cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
+        const int bits = a_bits + b_bits + (kinds ? 2 : 0);
+        cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
+          return cub::DeviceRadixSort::SortKeys(tmp, bytes, keys, static_cast<int>(n), 0, bits,
+                                                s);
+        });
+        in = keys.Alternate();  // the sorted keys are in Current()
+        unpackPairsKernel<<<blocksFor(unpack, 256), 256, 0, s>>>(
+            static_cast<std::uint32_t>(unpack), static_cast<std::uint32_t>(give),
+            keys.Current(), b_bits,
+            reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : in), a_bits,
+            kind_counts);
+        checkLaunch();
+      }
+      if (kinds)
+        CUDA_TRY(cudaMemcpyAsync(ctx.hostKinds(), ctx.kindCounts(),
+                                 2 * sizeof(unsigned long long), cudaMemcpyDeviceToHost, s));
     }
-    checkLaunch();
-    if (kinds)
-      CUDA_TRY(cudaMemcpyAsync(ctx.hostKinds(), ctx.kindCounts(), 2 * sizeof(unsigned long long),
-                               cudaMemcpyDeviceToHost, s));
     if (dev == nullptr) {
       // Through pinned memory (a pageable device->host copy runs at a fraction of the bus rate),
       // in chunks, each appended to the result as soon as it has arrived (staged_upload.h), or,
       // into storage the caller keeps, copied by several threads where that pays (a new
-      // result's empty vector always goes by the one thread: staging::downloadInto).
-      ctx.readback.reserve(m * sizeof(TrianglePair));
+      // result's empty vector always goes by the one thread: staging::downloadInto); or, after
+      // the one trip's copy, out of the stage that holds them all already.
+      if (!from_stage) ctx.readback.reserve(m * sizeof(TrianglePair));
       auto* const from = reinterpret_cast<const TrianglePair*>(in);
       auto* const stage = static_cast<TrianglePair*>(ctx.readback.data());
       if (parts == nullptr) {
-        CUDA_TRY(staging::downloadInto(from, m, stage, s, ctx.copy_pool, res.pairs));
+        if (from_stage) res.pairs.assign(stage, stage + m);
+        else CUDA_TRY(staging::downloadInto(from, m, stage, s, ctx.copy_pool, res.pairs));
       } else {
         // The three runs' ends (the kind counts arrived before the first chunk).
         std::size_t end0 = 0, end1 = 0;
@@ -2678,9 +2837,26 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
             e = stop;
           }
         };
-        const int threads = staging::pooledThreads(
-            m, parts[0].pairs.size() + parts[1].pairs.size() + parts[2].pairs.size());
-        if (threads > 0) {
+        // Pairs [at, at + k) appended to their parts (the first call clears and sizes them).
+        auto append = [&](std::size_t at, const TrianglePair* first, std::size_t k) {
+          if (at == 0) {
+            runs();
+            for (int kind = 0; kind < 3; ++kind) parts[kind].pairs.clear();
+            parts[0].pairs.reserve(end0);
+            parts[1].pairs.reserve(end1 - end0);
+            parts[2].pairs.reserve(m - end1);
+          }
+          deal(at, first, k, [&](int kind, std::size_t, const TrianglePair* p, std::size_t c) {
+            parts[kind].pairs.insert(parts[kind].pairs.end(), p, p + c);
+          });
+        };
+        const int threads =
+            from_stage ? 0
+                       : staging::pooledThreads(m, parts[0].pairs.size() + parts[1].pairs.size() +
+                                                       parts[2].pairs.size());
+        if (from_stage) {
+          append(0, stage, m);
+        } else if (threads > 0) {
           CUDA_TRY(staging::pooledDownload(
               from, m, stage, s, ctx.copy_pool, threads,
               [&] {
@@ -2700,17 +2876,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
           std::size_t at = 0;  // the next pair's index
           CUDA_TRY(staging::stagedDownload(from, m, stage, s, [&](const TrianglePair* first,
                                                                   std::size_t k) {
-            if (at == 0) {
-              runs();
-              for (int kind = 0; kind < 3; ++kind) parts[kind].pairs.clear();
-              parts[0].pairs.reserve(end0);
-              parts[1].pairs.reserve(end1 - end0);
-              parts[2].pairs.reserve(m - end1);
-            }
-            deal(at, first, k,
-                 [&](int kind, std::size_t, const TrianglePair* p, std::size_t c) {
-                   parts[kind].pairs.insert(parts[kind].pairs.end(), p, p + c);
-                 });
+            append(at, first, k);
             at += k;
           }));
         }
@@ -2731,6 +2897,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       dev->kinds[1] = ctx.hostKinds()[1];
     }
   }
+  if (dev == nullptr) ctx.last_host_pairs = m;
   res.complete = options.max_pairs == 0 || m < options.max_pairs;
   if (ctx.profiling) {
     CUDA_TRY(cudaEventSynchronize(ctx.ev[3]));
@@ -3330,6 +3497,7 @@ void readEveryKnob() {
   (void)planeFilterOn();
   (void)filterDecides();
   (void)countOrderAllowed();
+  (void)oneTripOn();
   (void)segmentMax();
   (void)roundCandidateLimit(1);
   (void)tileSize();

@@ -57,7 +57,12 @@
 // scan, a scatter, a rank within each segment) when there are at least kCountOrderMinPairs and no
 // segment holds more than 1024 (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=n: n), else by the radix sort;
 // KDET_FCL_CUDA_COUNT_ORDER=0 always sorts, =1 counts whatever the number of pairs (read at every
-// query). The warp-wide candidate scan passes the entries of the levels above a query's own by
+// query). The counting order is queued behind each pass's exact tests, sized on the device from
+// the pass's counters, and a host result of at most one read-back chunk is written by a kernel
+// into the page-locked stage in the same trip, so the host waits once per pass for the counts
+// and the pairs (any pair count; the radix sort still runs, after the counts, where a segment
+// holds more than 1024; not for a host result after one of more than kOneTripMaxChunks
+// chunks; KDET_FCL_CUDA_ONE_TRIP=0: the counts first, then the order; read at every query). The warp-wide candidate scan passes the entries of the levels above a query's own by
 // the size rule without loading their diameters (KDET_FCL_CUDA_SIZE_BY_LEVEL=0 loads them), and
 // a self query of a mesh of at most 1.5 vertices per triangle applies the adjacency rule by
 // vertex index in phase 1, leaving the pairs that share a vertex by coordinates alone to the
@@ -111,6 +116,17 @@ namespace cuda {
 /// pairs of the 20k cloth against 14 us for the count's scan, scatter and rank (H100, ncu;
 /// benchmarks/RESULTS-gpu.md). It was 4,096 until 2026-11-24.
 constexpr std::size_t kCountOrderMinPairs = 2048;
+
+/// A query into a host result queues its pairs' order in the same trip as the pass's counts
+/// (KDET_FCL_CUDA_ONE_TRIP) unless the last query into a host result delivered more pairs than
+/// this many read-back chunks hold (KDET_FCL_CUDA_DOWNLOAD_CHUNK, 256 KiB: 32,768 pairs). A
+/// large list is read back in chunks whose copies and events the host enqueues after the counts
+/// (a few us each; the likely cost, not profiled); with the order queued after the counts, that
+/// enqueueing overlaps the order's kernels. In two trips the joint two cloth-ball frames (13.6
+/// chunks) were 0.046 ms faster, the joint two n-body frames (2.1 chunks) 0.018-0.038 ms
+/// slower, the cloth ball (1.9) level (H100, benchmarks/RESULTS-gpu.md). Queries into a device
+/// buffer always take one trip.
+constexpr std::size_t kOneTripMaxChunks = 4;
 
 /// intersectMeshes() on device 0. Throws CudaError on a CUDA failure (the device caches are then
 /// dropped, so a later call starts from scratch).
@@ -240,6 +256,15 @@ struct QueryProfile {
                                ///< sort; KDET_FCL_CUDA_COUNT_ORDER =0: always the sort, =1:
                                ///< counted whatever the pair count).
                                ///< False when no pair was delivered (none found, or capacity 0)
+  bool one_trip = false;  ///< the last pass queued the counting order behind its exact tests,
+                          ///< sized on the device, so the host waited once for the counts and
+                          ///< the ordered pairs (KDET_FCL_CUDA_ONE_TRIP; any pair count; not
+                          ///< after a segment of more than 1024 pairs, nor for a host result
+                          ///< after one of more than kOneTripMaxChunks read-back chunks).
+                          ///< False as pairs_counted
+  bool one_trip_copy = false;  ///< and a host result's pairs (at most one read-back chunk,
+                               ///< KDET_FCL_CUDA_DOWNLOAD_CHUNK) came in that same trip, written
+                               ///< by a kernel into the page-locked stage
 };
 void setProfiling(bool on);
 QueryProfile lastQueryProfile();

@@ -401,6 +401,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_ORDER", on_off, not_on_off},
+      {"KDET_FCL_CUDA_ONE_TRIP", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", {"1", "256", "65536"}, {"0", "65537", "1k"}},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_FILTER_DECIDES", on_off, not_on_off},
@@ -1567,153 +1568,254 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // default; 2,400: counted, where the limit was 4,096 until 2026-11-24); with
   // KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=300, segments of 300 (counted when forced) and 301
   // (sorted), and 20 fans of 257 (5,140 pairs: counted by default).
+  // All of it twice: with the order queued in the same trip as the counts (the default,
+  // KDET_FCL_CUDA_ONE_TRIP; then the floor does not apply: counted by default wherever no
+  // segment is too large, and one_trip set where counted) and after them
+  // (KDET_FCL_CUDA_ONE_TRIP=0). Every host result here fits one 256 KiB read-back chunk (32,768
+  // pairs), so the one trip also brings the pairs (one_trip_copy), the joint ones dealt out to
+  // the three results from there (OneTripBringsSmallHostResultsAndStepsAsideForLargeOnes has the
+  // limits).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
+  // 256 KiB read-back chunks, whatever the run's knob (the expectations of one_trip_copy and of
+  // the rule after large host results are those of the default chunk).
+  kdet_test::ScopedEnv whole_chunks("KDET_FCL_CUDA_DOWNLOAD_CHUNK", nullptr);
   cuda::setProfiling(true);
-  // `query()` by default, with counting forced and with the radix sort: the same pairs each
-  // time; `by_default` and `forced`: whether those two counted.
-  auto orders = [](const std::string& what, bool by_default, bool forced, auto&& query) {
-    const std::vector<TrianglePair> first = query();
-    EXPECT_EQ(cuda::lastQueryProfile().pairs_counted, by_default) << what << ", by default";
-    for (const char* knob : {"1", "0"}) {
-      kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
-      EXPECT_EQ(query(), first) << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob;
-      EXPECT_EQ(cuda::lastQueryProfile().pairs_counted, knob[0] == '1' && forced)
-          << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob;
-    }
-    return first;
-  };
-  // The expected choices for a query of a mesh of `triangles` that finds `pairs`.
-  auto choices = [](const std::vector<TrianglePair>& pairs, std::size_t triangles) {
-    const bool fits = !pairs.empty() && largestSegment({pairs}, triangles) <= 1024;
-    return std::make_pair(fits && pairs.size() >= cuda::kCountOrderMinPairs, fits);
-  };
-  auto selfPairs = [](const HashedMesh<S>& m, std::size_t max_pairs = 0) {
-    return [&m, max_pairs] { return intersectSelf(m, on(Backend::Cuda, max_pairs)).pairs; };
-  };
-  auto checkSelf = [&](const std::string& what, const HashedMesh<S>& m) {
-    const std::vector<TrianglePair> want = sorted(intersectSelf(m, on(Backend::Cpu)).pairs);
-    const auto c = choices(want, m.numTriangles());
-    EXPECT_EQ(orders(what, c.first, c.second, selfPairs(m)), want) << what;
-    return want;
-  };
-  HashedMesh<S> cloth(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(1.0)));  // on the sphere
-  HashedMesh<S> cloth2(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.95)));
-  HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
-  HashedMesh<S> big(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(1.0)));
-  ASSERT_GT(big.numTriangles(), 65536u);  // 17 index bits: two first indices per segment
-  const std::vector<TrianglePair> cloth_self = checkSelf("cloth self", cloth);
-  ASSERT_GT(cloth_self.size(), 100u);
-  const auto cloth_choices = choices(cloth_self, cloth.numTriangles());
-  EXPECT_TRUE(cloth_choices.second);  // counted when forced
-  EXPECT_GT(checkSelf("big cloth self", big).size(), 100u);
-  {
-    const std::vector<TrianglePair> want =
-        sorted(intersectMeshes(cloth, sphere, on(Backend::Cpu)).pairs);
-    EXPECT_GT(want.size(), 10u);
-    const auto c = choices(want, cloth.numTriangles());
-    EXPECT_EQ(orders("cloth/sphere", c.first, c.second,
-                     [&] { return intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs; }),
-              want);
-  }
-  {
-    const std::vector<TrianglePair> want =
-        sorted(intersectMeshes(big, sphere, on(Backend::Cpu)).pairs);
-    EXPECT_GT(want.size(), 10u);
-    const auto c = choices(want, big.numTriangles());  // two first indices per segment
-    EXPECT_EQ(orders("big cloth/sphere", c.first, c.second,
-                     [&] { return intersectMeshes(big, sphere, on(Backend::Cuda)).pairs; }),
-              want);
-  }
-  // Joint: the three kinds, each a run in the order (the first mesh's self pairs, the second's,
-  // a mark, the pairs across), by default, counted when forced, and sorted; their segments are
-  // (kind, first index) for the two small cloths, and 16 first indices of a kind for the two
-  // large ones (2 x 72k triangles).
-  auto joint = [&](const HashedMesh<S>& a, const HashedMesh<S>& b, const std::string& what) {
-    const QueryOptions cpu = on(Backend::Cpu);
-    const std::vector<std::vector<TrianglePair>> runs = {
-        sorted(intersectSelf(a, cpu).pairs), sorted(intersectSelf(b, cpu).pairs),
-        sorted(intersectMeshes(a, b, cpu).pairs)};
-    std::vector<TrianglePair> want = runs[0];
-    want.insert(want.end(), runs[1].begin(), runs[1].end());
-    want.push_back({~0u, ~0u});
-    want.insert(want.end(), runs[2].begin(), runs[2].end());
-    const bool fits = largestSegment(runs, a.numTriangles() + b.numTriangles()) <= 1024;
-    auto run = [&] {
-      const AllPairsResult r = intersectAll(a, b, on(Backend::Cuda));
-      EXPECT_TRUE(cuda::lastQueryProfile().joint) << what;
-      std::vector<TrianglePair> all = r.self_a.pairs;
-      all.insert(all.end(), r.self_b.pairs.begin(), r.self_b.pairs.end());
-      all.push_back({~0u, ~0u});
-      all.insert(all.end(), r.inter.pairs.begin(), r.inter.pairs.end());
-      return std::make_pair(all, cuda::lastQueryProfile().pairs_counted);
+  for (const bool trip : {true, false}) {
+    kdet_test::ScopedEnv trip_knob("KDET_FCL_CUDA_ONE_TRIP", trip ? "1" : "0");
+    const std::string trips = trip ? ", one trip" : ", two trips";
+    // Whether the last query counted its pairs as `counted` says, in one trip where it should.
+    auto expectCounted = [&](bool counted, const std::string& what) {
+      const cuda::QueryProfile p = cuda::lastQueryProfile();
+      EXPECT_EQ(p.pairs_counted, counted) << what << trips;
+      EXPECT_EQ(p.one_trip, trip && counted) << what << trips;
+      if (!p.one_trip) EXPECT_FALSE(p.one_trip_copy) << what << trips;
     };
-    const auto by_default = run();
-    EXPECT_EQ(by_default.first, want) << what;
-    EXPECT_EQ(by_default.second, fits && want.size() - 1 >= cuda::kCountOrderMinPairs)
-        << what << ", by default";
-    for (const char* knob : {"1", "0"}) {
-      kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
-      const auto other = run();
-      EXPECT_EQ(other.first, want) << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob;
-      EXPECT_EQ(other.second, knob[0] == '1' && fits)
-          << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob;
-    }
-    return fits;
-  };
-  EXPECT_TRUE(joint(cloth, cloth2, "two cloths, joint"));  // counted when forced
-  HashedMesh<S> big2(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(0.95)));
-  (void)joint(big, big2, "two big cloths, joint");
-  EXPECT_EQ(orders("cloth self, max_pairs 9", cloth_choices.first, true, selfPairs(cloth, 9)),
-            std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + 9));
-  {
-    kdet_test::ScopedEnv small("KDET_FCL_CUDA_PAIR_CAPACITY", "7");  // overflow and rerun
-    EXPECT_EQ(selfPairs(cloth)(), cloth_self);
-    kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", "1");
-    EXPECT_EQ(selfPairs(cloth)(), cloth_self) << "pair buffers of 7, counted";
-    EXPECT_TRUE(cuda::lastQueryProfile().pairs_counted);
-  }
-  {
-    const std::size_t third = cloth_self.size() / 3;
-    DevicePairBuffer buf(third + 1);
-    EXPECT_EQ(orders("cloth self on the device, a third", cloth_choices.first, true,
-                     [&] {
-                       const DevicePairsResult d =
-                           intersectSelfOnDevice(cloth, buf.p, third, on(Backend::Cuda));
-                       EXPECT_EQ(d.count, cloth_self.size());
-                       std::vector<TrianglePair> got = buf.read();
-                       EXPECT_EQ(got.back(), kUnwritten);
-                       got.pop_back();
-                       return got;
-                     }),
-              std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + third));
-  }
-  // Fans: the segment of each large triangle holds exactly k pairs; the most a counted segment
-  // may hold is 1024, or KDET_FCL_CUDA_COUNT_ORDER_SEGMENT (`most`: 300 here).
-  struct Fans {
-    std::size_t fans, k;
-    const char* most;
-  };
-  for (const Fans fk : {Fans{1, 1024, nullptr}, Fans{1, 1025, nullptr}, Fans{80, 60, nullptr},
-                        Fans{34, 60, nullptr}, Fans{40, 60, nullptr},
-                        Fans{1, 300, "300"}, Fans{1, 301, "300"}, Fans{20, 257, "300"}}) {
-    const std::size_t fans = fk.fans, k = fk.k;
-    kdet_test::ScopedEnv most("KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", fk.most);
-    const std::size_t limit = fk.most ? std::size_t(std::atoi(fk.most)) : 1024;
-    const HashedMesh<S> m(makeFans<S>(fans, k));
-    const std::string what = std::to_string(fans) + " fans of " + std::to_string(k) +
-                             ", segments of at most " + std::to_string(limit);
-    const std::vector<TrianglePair> pairs =
-        orders(what, fans * k >= cuda::kCountOrderMinPairs && k <= limit, k <= limit, selfPairs(m));
-    ASSERT_EQ(pairs.size(), fans * k) << what;
-    for (std::size_t f = 0; f < fans; ++f)
-      for (std::size_t i = 0; i < k; ++i) {
-        const auto a = static_cast<std::uint32_t>(f * (k + 1));
-        EXPECT_EQ(pairs[f * k + i], (TrianglePair{a, a + static_cast<std::uint32_t>(i + 1)}))
-            << what;
+    // `query()` by default, with counting forced and with the radix sort: the same pairs each
+    // time; `by_default` and `forced`: whether those two counted.
+    auto orders = [&](const std::string& what, bool by_default, bool forced, auto&& query) {
+      const std::vector<TrianglePair> first = query();
+      expectCounted(by_default, what + ", by default");
+      for (const char* knob : {"1", "0"}) {
+        kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
+        EXPECT_EQ(query(), first) << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob << trips;
+        expectCounted(knob[0] == '1' && forced, what + ", KDET_FCL_CUDA_COUNT_ORDER=" + knob);
       }
+      return first;
+    };
+    // Whether `pairs` are counted by default (the floor, in two trips).
+    auto byDefault = [&](bool fits, std::size_t pairs) {
+      return fits && (trip || pairs >= cuda::kCountOrderMinPairs);
+    };
+    // The expected choices for a query of a mesh of `triangles` that finds `pairs`.
+    auto choices = [&](const std::vector<TrianglePair>& pairs, std::size_t triangles) {
+      const bool fits = !pairs.empty() && largestSegment({pairs}, triangles) <= 1024;
+      return std::make_pair(byDefault(fits, pairs.size()), fits);
+    };
+    auto selfPairs = [](const HashedMesh<S>& m, std::size_t max_pairs = 0) {
+      return [&m, max_pairs] { return intersectSelf(m, on(Backend::Cuda, max_pairs)).pairs; };
+    };
+    auto checkSelf = [&](const std::string& what, const HashedMesh<S>& m) {
+      const std::vector<TrianglePair> want = sorted(intersectSelf(m, on(Backend::Cpu)).pairs);
+      const auto c = choices(want, m.numTriangles());
+      EXPECT_EQ(orders(what, c.first, c.second, selfPairs(m)), want) << what;
+      return want;
+    };
+    HashedMesh<S> cloth(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(1.0)));  // on the sphere
+    HashedMesh<S> cloth2(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.95)));
+    HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
+    HashedMesh<S> big(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(1.0)));
+    ASSERT_GT(big.numTriangles(), 65536u);  // 17 index bits: two first indices per segment
+    // (The last host result of the tests before may have been large: one trip from here on.)
+    (void)selfPairs(cloth)();
+    const std::vector<TrianglePair> cloth_self = checkSelf("cloth self", cloth);
+    ASSERT_GT(cloth_self.size(), 100u);
+    (void)selfPairs(cloth)();  // (its pairs fit one 256 KiB read-back chunk)
+    EXPECT_EQ(cuda::lastQueryProfile().one_trip_copy, trip) << "cloth self" << trips;
+    const auto cloth_choices = choices(cloth_self, cloth.numTriangles());
+    EXPECT_TRUE(cloth_choices.second);  // counted when forced
+    EXPECT_GT(checkSelf("big cloth self", big).size(), 100u);
+    {
+      const std::vector<TrianglePair> want =
+          sorted(intersectMeshes(cloth, sphere, on(Backend::Cpu)).pairs);
+      EXPECT_GT(want.size(), 10u);
+      const auto c = choices(want, cloth.numTriangles());
+      EXPECT_EQ(orders("cloth/sphere", c.first, c.second,
+                       [&] { return intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs; }),
+                want);
+    }
+    {
+      const std::vector<TrianglePair> want =
+          sorted(intersectMeshes(big, sphere, on(Backend::Cpu)).pairs);
+      EXPECT_GT(want.size(), 10u);
+      const auto c = choices(want, big.numTriangles());  // two first indices per segment
+      EXPECT_EQ(orders("big cloth/sphere", c.first, c.second,
+                       [&] { return intersectMeshes(big, sphere, on(Backend::Cuda)).pairs; }),
+                want);
+    }
+    // Joint: the three kinds, each a run in the order (the first mesh's self pairs, the second's,
+    // a mark, the pairs across), by default, counted when forced, and sorted; their segments are
+    // (kind, first index) for the two small cloths, and 16 first indices of a kind for the two
+    // large ones (2 x 72k triangles).
+    auto joint = [&](const HashedMesh<S>& a, const HashedMesh<S>& b, const std::string& what) {
+      const QueryOptions cpu = on(Backend::Cpu);
+      const std::vector<std::vector<TrianglePair>> runs = {
+          sorted(intersectSelf(a, cpu).pairs), sorted(intersectSelf(b, cpu).pairs),
+          sorted(intersectMeshes(a, b, cpu).pairs)};
+      std::vector<TrianglePair> want = runs[0];
+      want.insert(want.end(), runs[1].begin(), runs[1].end());
+      want.push_back({~0u, ~0u});
+      want.insert(want.end(), runs[2].begin(), runs[2].end());
+      const bool fits = largestSegment(runs, a.numTriangles() + b.numTriangles()) <= 1024;
+      auto run = [&] {
+        const AllPairsResult r = intersectAll(a, b, on(Backend::Cuda));
+        EXPECT_TRUE(cuda::lastQueryProfile().joint) << what;
+        std::vector<TrianglePair> all = r.self_a.pairs;
+        all.insert(all.end(), r.self_b.pairs.begin(), r.self_b.pairs.end());
+        all.push_back({~0u, ~0u});
+        all.insert(all.end(), r.inter.pairs.begin(), r.inter.pairs.end());
+        return std::make_pair(all, cuda::lastQueryProfile().pairs_counted);
+      };
+      const auto by_default = run();
+      EXPECT_EQ(by_default.first, want) << what << trips;
+      EXPECT_EQ(by_default.second, byDefault(fits, want.size() - 1)) << what << ", by default";
+      expectCounted(by_default.second, what + ", by default");
+      for (const char* knob : {"1", "0"}) {
+        kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", knob);
+        const auto other = run();
+        EXPECT_EQ(other.first, want) << what << ", KDET_FCL_CUDA_COUNT_ORDER=" << knob << trips;
+        expectCounted(knob[0] == '1' && fits, what + ", KDET_FCL_CUDA_COUNT_ORDER=" + knob);
+      }
+      // In one trip, the three runs dealt out of the stage (all fit one 256 KiB chunk).
+      EXPECT_EQ(run().first, want) << what << trips;
+      EXPECT_LE(want.size() - 1, 32768u) << what;
+      EXPECT_EQ(cuda::lastQueryProfile().one_trip_copy, trip && fits) << what << trips;
+      return fits;
+    };
+    EXPECT_TRUE(joint(cloth, cloth2, "two cloths, joint"));  // counted when forced
+    HashedMesh<S> big2(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(0.95)));
+    (void)joint(big, big2, "two big cloths, joint");
+    EXPECT_EQ(orders("cloth self, max_pairs 9", cloth_choices.first, true, selfPairs(cloth, 9)),
+              std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + 9));
+    {
+      kdet_test::ScopedEnv small("KDET_FCL_CUDA_PAIR_CAPACITY", "7");  // overflow and rerun
+      EXPECT_EQ(selfPairs(cloth)(), cloth_self) << trips;
+      EXPECT_GT(cuda::lastQueryProfile().passes, 1) << trips;
+      kdet_test::ScopedEnv order("KDET_FCL_CUDA_COUNT_ORDER", "1");
+      EXPECT_EQ(selfPairs(cloth)(), cloth_self) << "pair buffers of 7, counted" << trips;
+      EXPECT_GT(cuda::lastQueryProfile().passes, 1) << trips;
+      expectCounted(true, "pair buffers of 7, counted");
+    }
+    {
+      const std::size_t third = cloth_self.size() / 3;
+      DevicePairBuffer buf(third + 1);
+      EXPECT_EQ(orders("cloth self on the device, a third", cloth_choices.first, true,
+                       [&] {
+                         const DevicePairsResult d =
+                             intersectSelfOnDevice(cloth, buf.p, third, on(Backend::Cuda));
+                         EXPECT_EQ(d.count, cloth_self.size());
+                         EXPECT_FALSE(cuda::lastQueryProfile().one_trip_copy);
+                         std::vector<TrianglePair> got = buf.read();
+                         EXPECT_EQ(got.back(), kUnwritten);
+                         got.pop_back();
+                         return got;
+                       }),
+                std::vector<TrianglePair>(cloth_self.begin(), cloth_self.begin() + third));
+    }
+    // Fans: the segment of each large triangle holds exactly k pairs; the most a counted segment
+    // may hold is 1024, or KDET_FCL_CUDA_COUNT_ORDER_SEGMENT (`most`: 300 here).
+    struct Fans {
+      std::size_t fans, k;
+      const char* most;
+    };
+    for (const Fans fk : {Fans{1, 1024, nullptr}, Fans{1, 1025, nullptr}, Fans{80, 60, nullptr},
+                          Fans{34, 60, nullptr}, Fans{40, 60, nullptr},
+                          Fans{1, 300, "300"}, Fans{1, 301, "300"}, Fans{20, 257, "300"}}) {
+      const std::size_t fans = fk.fans, k = fk.k;
+      kdet_test::ScopedEnv most("KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", fk.most);
+      const std::size_t limit = fk.most ? std::size_t(std::atoi(fk.most)) : 1024;
+      const HashedMesh<S> m(makeFans<S>(fans, k));
+      const std::string what = std::to_string(fans) + " fans of " + std::to_string(k) +
+                               ", segments of at most " + std::to_string(limit);
+      const std::vector<TrianglePair> pairs =
+          orders(what, byDefault(k <= limit, fans * k), k <= limit, selfPairs(m));
+      ASSERT_EQ(pairs.size(), fans * k) << what << trips;
+      for (std::size_t f = 0; f < fans; ++f)
+        for (std::size_t i = 0; i < k; ++i) {
+          const auto a = static_cast<std::uint32_t>(f * (k + 1));
+          EXPECT_EQ(pairs[f * k + i], (TrianglePair{a, a + static_cast<std::uint32_t>(i + 1)}))
+              << what << trips;
+        }
+    }
+  }
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOnes) {
+  // With 4 KiB read-back chunks (512 pairs): a host result of at most one chunk comes in the
+  // same trip as the counts (one_trip_copy); a larger one is ordered in that trip and read back
+  // after it; after a host result of more than cuda::kOneTripMaxChunks chunks (2,048 pairs; the
+  // pairs delivered, after max_pairs), the next host query orders its pairs after the counts
+  // (one_trip false: counted or sorted as the floor says), and the one after a small result
+  // takes one trip again. Queries into a device buffer always take one trip and do not move the
+  // rule. Fans give exact pair counts: 300, 1,000 and 4,800 (80 fans of 60).
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
+  kdet_test::ScopedEnv trip_on("KDET_FCL_CUDA_ONE_TRIP", nullptr);  // (the default: on)
+  kdet_test::ScopedEnv chunk("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
+  ASSERT_EQ(cuda::kOneTripMaxChunks * 512, 2048u);
+  cuda::setProfiling(true);
+  const HashedMesh<S> small(makeFans<S>(1, 300)), mid(makeFans<S>(1, 1000)),
+      large(makeFans<S>(80, 60));
+  const std::vector<TrianglePair> want_small = sorted(intersectSelf(small, on(Backend::Cpu)).pairs),
+                                  want_mid = sorted(intersectSelf(mid, on(Backend::Cpu)).pairs),
+                                  want_large = sorted(intersectSelf(large, on(Backend::Cpu)).pairs);
+  ASSERT_EQ(want_small.size(), 300u);
+  ASSERT_EQ(want_mid.size(), 1000u);
+  ASSERT_EQ(want_large.size(), 4800u);
+  // A host query of `m` expecting (one trip, its copy, counted).
+  auto step = [](const std::string& what, const HashedMesh<S>& m, std::size_t max_pairs,
+                 const std::vector<TrianglePair>& want, bool trip, bool copy, bool counted) {
+    const QueryResult r = intersectSelf(m, on(Backend::Cuda, max_pairs));
+    EXPECT_EQ(r.pairs, want) << what;
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    EXPECT_EQ(p.one_trip, trip) << what;
+    EXPECT_EQ(p.one_trip_copy, copy) << what;
+    EXPECT_EQ(p.pairs_counted, counted) << what;
+  };
+  (void)intersectSelf(small, on(Backend::Cuda));  // the last host result small
+  step("300 pairs", small, 0, want_small, true, true, true);
+  step("1,000 pairs after 300", mid, 0, want_mid, true, false, true);
+  step("1,000 pairs after 1,000", mid, 0, want_mid, true, false, true);
+  step("4,800 pairs after 1,000", large, 0, want_large, true, false, true);
+  step("4,800 pairs after 4,800", large, 0, want_large, false, false, true);
+  step("300 pairs after 4,800 (sorted)", small, 0, want_small, false, false, false);
+  step("300 pairs after 300", small, 0, want_small, true, true, true);
+  {  // Into a device buffer after a large host result: one trip; the host rule stays.
+    step("4,800 pairs after 300", large, 0, want_large, true, false, true);
+    DevicePairBuffer buf(want_large.size());
+    const DevicePairsResult d =
+        intersectSelfOnDevice(large, buf.p, want_large.size(), on(Backend::Cuda));
+    EXPECT_EQ(d.count, want_large.size());
+    EXPECT_EQ(buf.read(), want_large);
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    EXPECT_TRUE(p.one_trip);
+    EXPECT_FALSE(p.one_trip_copy);
+    step("300 pairs after 4,800 and the device's", small, 0, want_small, false, false, false);
+  }
+  // max_pairs: the pairs delivered count, not those found.
+  const std::vector<TrianglePair> first400(want_large.begin(), want_large.begin() + 400);
+  step("4,800 pairs, 400 delivered, after 300", large, 400, first400, true, true, true);
+  step("4,800 pairs after 400 delivered", large, 0, want_large, true, false, true);
+  {
+    kdet_test::ScopedEnv off("KDET_FCL_CUDA_ONE_TRIP", "0");
+    step("300 pairs, one trip off", small, 0, want_small, false, false, false);
+    step("4,800 pairs, one trip off", large, 0, want_large, false, false, true);
   }
   cuda::setProfiling(false);
 #endif

@@ -1,0 +1,42 @@
+#!/bin/bash
+# Device call 5 (carry .fcl-debs and .gpu-data): the one trip with its rule for large host results
+# (kOneTripMaxChunks) and the tests of call 3 mended. The pairs' order queued in the same trip as the
+# pass's counts (KDET_FCL_CUDA_ONE_TRIP, default on). Builds the CUDA tests and gpu_bench;
+# ctest -L cuda; memcheck and racecheck of the one-trip and counting-order tests (float); gpu_bench on the UNC
+# scenes and the 20k, 90k, 250k and 1M cloths in six rounds alternating the knob (1, 0, ...).
+set -u
+cd "$(dirname "$0")/../../.."
+T=$OUT/times.txt
+date > $T
+export KDET_FCL_DATA_DIR=$PWD/.gpu-data
+mkdir -p /tmp/c5
+OUT=/tmp/c5 CTEST_ALL=0 JOBS=16 \
+  TARGETS="test_cuda_query test_cuda_upload test_cuda_box_test test_cuda_device test_cuda_bvh gpu_bench" \
+  scripts/gpu_check.sh > /tmp/c5/check.log 2>&1
+echo "check rc=$?" >> $T
+grep -E "tests passed|tests failed|Failed|\*\*\*" /tmp/c5/ctest.log | head -30 >> $T
+date >> $T
+export LD_LIBRARY_PATH=$PWD/.fcl-debs/root/usr/lib/x86_64-linux-gnu
+SAN=$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)
+F='CudaQueryTyped/0.OneTripBrings*:CudaQueryTyped/0.PairsAreOrderedByCounting*'
+for tool in memcheck racecheck; do
+  timeout 200 $SAN --tool $tool --error-exitcode 3 build-gpu/tests/test_cuda_query \
+    --gtest_filter="$F" > /tmp/c5/$tool-new.log 2>&1
+  echo "$tool ($F) rc=$?" >> $T; tail -2 /tmp/c5/$tool-new.log >> $T
+done
+date >> $T
+B=build-gpu/benchmarks/gpu_bench
+r=0
+for R in 1 0 1 0 1 0; do
+  r=$((r + 1))
+  KDET_FCL_CUDA_ONE_TRIP=$R timeout 100 $B --no-fcl --no-cpu --repeats 20 \
+    --only unc --only cloth-20k --only cloth-90k --only cloth-250k --only cloth-1000k \
+    --csv /tmp/c5/bench-$r.csv >> /tmp/c5/bench.log 2>&1
+  echo "bench round $r (one trip $R) rc=$?" >> $T
+  if [ $r = 1 ]; then head -1 /tmp/c5/bench-1.csv | sed 's/^/round,one_trip,/' > $OUT/bench.csv; fi
+  tail -n +2 /tmp/c5/bench-$r.csv | sed "s/^/$r,$R,/" >> $OUT/bench.csv
+done
+date >> $T
+tar czf $OUT/logs.tgz -C /tmp/c5 check.log ctest.log bench.log memcheck-new.log racecheck-new.log \
+  $(cd /tmp/c5 && ls build.log 2>/dev/null)
+date >> $T
