@@ -251,10 +251,11 @@ struct QueryProfile {
   bool joint = false;  ///< intersectAll hashed both meshes as one and ran one self query
                        ///< (KDET_FCL_CUDA_JOINT)
   bool pairs_counted = false;  ///< the pairs were put in order by counting them per segment of
-                               ///< first indices, not by the radix sort (fewer than
-                               ///< kCountOrderMinPairs pairs or a segment of more than 1024: the
-                               ///< sort; KDET_FCL_CUDA_COUNT_ORDER =0: always the sort, =1:
-                               ///< counted whatever the pair count).
+                               ///< first indices, not by the radix sort (a segment of more than
+                               ///< 1024, or, ordered after the counts (one_trip false), fewer
+                               ///< than kCountOrderMinPairs pairs: the sort;
+                               ///< KDET_FCL_CUDA_COUNT_ORDER =0: always the sort, =1: counted
+                               ///< whatever the pair count).
                                ///< False when no pair was delivered (none found, or capacity 0)
   bool one_trip = false;  ///< the last pass queued the counting order behind its exact tests,
                           ///< sized on the device, so the host waited once for the counts and
