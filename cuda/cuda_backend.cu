@@ -2596,11 +2596,11 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   ctx.profile.staged_pairs = staged;
   if (counting) ctx.segs.reserve(segments);
   unsigned long long* const kind_counts = kinds ? ctx.kindCounts() : nullptr;
-  // Where the counting order delivers the pairs: the caller's device buffer, or the key buffer
-  // the order no longer needs (read at each use: the buffer may have grown).
-  auto delivery = [&] {
-    return reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr)
-                                                   : static_cast<void*>(ctx.pairs.data()));
+  // Where the order delivers the pairs: the caller's device buffer, or `spare`, a key buffer
+  // the order no longer needs (the counting order's: ctx.pairs, read at each use, as it may
+  // have grown; the sort's: its alternate buffer).
+  auto delivery = [&](void* spare) {
+    return reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : spare);
   };
   // The counting order: the segments' starts (in place), each key into its segment, its rank
   // there (the order of the sort, in three light kernels instead of the sort's passes), sized
@@ -2615,7 +2615,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                                               ctx.pairs_sorted.data());
     checkLaunch();
     rankPairsKernel<<<blocks, 256, 0, s>>>(z, ctx.pairs_sorted.data(), order_shift, seg, b_bits,
-                                           delivery(), a_bits, kind_counts);
+                                           delivery(ctx.pairs.data()), a_bits, kind_counts);
     checkLaunch();
   };
   // One trip (oneTripOn): each pass queues the counting order behind its exact tests, and a
@@ -2624,8 +2624,8 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   // host result when the last one took more than kOneTripMaxChunks chunks: the host then
   // enqueues a copy and an event per chunk (a few us each) after the counts, which the order's
   // kernels cover when they are queued after the counts instead.
-  const std::size_t chunk_pairs = std::min<std::size_t>(
-      std::max<std::size_t>(1, staging::downloadChunk() / sizeof(TrianglePair)), 0x7FFFFFFF);
+  const std::size_t chunk_pairs =
+      std::min<std::size_t>(staging::downloadChunkElements(sizeof(TrianglePair)), 0x7FFFFFFF);
   const bool one_trip =
       counting && oneTripOn() &&
       (dev != nullptr || ctx.last_host_pairs <= kOneTripMaxChunks * chunk_pairs);
@@ -2685,7 +2685,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       if (copy_most > 0) {
         copyPairsOutKernel<<<std::min<unsigned int>(blocksFor(copy_most, 256),
                                                     static_cast<unsigned int>(2 * g_num_sms)),
-                             256, 0, s>>>(trip, delivery(),
+                             256, 0, s>>>(trip, delivery(ctx.pairs.data()),
                                           static_cast<uint2*>(ctx.readback.deviceData()),
                                           copy_most);
         checkLaunch();
@@ -2796,9 +2796,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
         in = keys.Alternate();  // the sorted keys are in Current()
         unpackPairsKernel<<<blocksFor(unpack, 256), 256, 0, s>>>(
             static_cast<std::uint32_t>(unpack), static_cast<std::uint32_t>(give),
-            keys.Current(), b_bits,
-            reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : in), a_bits,
-            kind_counts);
+            keys.Current(), b_bits, delivery(in), a_bits, kind_counts);
         checkLaunch();
       }
       if (kinds)

@@ -77,6 +77,12 @@ inline std::size_t downloadChunk() {
   return chunkFrom("KDET_FCL_CUDA_DOWNLOAD_CHUNK", kDownloadChunk);
 }
 
+/// A download chunk in elements of `bytes` bytes: downloadChunk() rounded down to whole
+/// elements, at least one.
+inline std::size_t downloadChunkElements(std::size_t bytes) {
+  return std::max<std::size_t>(1, downloadChunk() / bytes);
+}
+
 /// Host threads for `chunks` chunks: the knob `name` (1..64; any other value throws), else up
 /// to `most` and the hardware's thread count; never more than the chunks, at least one.
 inline int threadsFor(const char* name, int most, std::size_t chunks) {
@@ -246,7 +252,7 @@ template <class T>
 cudaError_t downloadChunks(const T* src, std::size_t count, T* stage, cudaStream_t s,
                            ChunkEvents& out) {
   out.s = s;
-  out.chunk = std::max<std::size_t>(1, downloadChunk() / sizeof(T));
+  out.chunk = downloadChunkElements(sizeof(T));
   const std::size_t chunks = (count + out.chunk - 1) / out.chunk;
   out.ev.reserve(chunks);
   for (std::size_t c = 0; c < chunks; ++c) {
@@ -423,7 +429,7 @@ cudaError_t pooledDownload(const T* src, std::size_t count, T* stage, cudaStream
 /// half (a new result would be zero-filled whole first, which costs what the threads save).
 /// Returns the threads, or 0 for a download by the calling thread alone.
 inline int pooledThreads(std::size_t count, std::size_t held) {
-  const std::size_t chunk = std::max<std::size_t>(1, downloadChunk() / sizeof(std::uint64_t));
+  const std::size_t chunk = downloadChunkElements(sizeof(std::uint64_t));
   const std::size_t chunks = (count + chunk - 1) / chunk;
   const int threads = downloadThreads(chunks);
   const bool pooled = chunks >= kPooledDownloadMinChunks && threads > 1 && 2 * held >= count;
