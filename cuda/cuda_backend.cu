@@ -31,6 +31,8 @@
 #include <cooperative_groups/reduce.h>
 #include <cuda_runtime_api.h>
 
+#include <cub/block/block_reduce.cuh>
+#include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 
@@ -1366,18 +1368,23 @@ __global__ void shiftIndicesKernel(std::uint32_t n, std::uint32_t by, std::uint3
 
 /// Delivers the pair with key `u` at place k of the sorted order (k below the m delivered):
 /// written to out[k] in TrianglePair layout {a, b} when k < limit (out: the key buffer the order
-/// no longer needs, or the caller's device buffer). With `kinds` (two meshes hashed as one: the
+/// no longer needs, or the caller's device buffer), and to copy[k] too where copy is set (the
+/// host's mapped stage: orderPairsKernel). With `kinds` (two meshes hashed as one: the
 /// pair's kind in the bits of a from a_bits up, selfExactKernel), also counts the pairs of kinds
 /// 1 and 2 into kinds[0] and kinds[1] and clears the kind from a: the host knows where each
 /// kind's run starts from the counts.
 __device__ __forceinline__ void deliverPair(std::uint32_t k, unsigned long long u,
                                             std::uint32_t limit, int b_bits,
                                             uint2* __restrict__ out, int a_bits,
-                                            unsigned long long* kinds) {
+                                            unsigned long long* kinds,
+                                            uint2* __restrict__ copy = nullptr) {
   const auto a = static_cast<unsigned int>(u >> b_bits);
   const unsigned int a_mask = kinds != nullptr ? (1u << a_bits) - 1 : ~0u;
-  if (k < limit)
-    out[k] = make_uint2(a & a_mask, static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
+  if (k < limit) {
+    const uint2 p = make_uint2(a & a_mask, static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
+    out[k] = p;
+    if (copy != nullptr) copy[k] = p;
+  }
   if (kinds != nullptr) {
     // The keys are in order (or in segments of one kind), so a warp's lanes mostly share one
     // kind: one atomic per kind among the lanes that arrive together (lanes that arrive apart,
@@ -1443,6 +1450,30 @@ __host__ __device__ __forceinline__ bool resolve(OrderSizes& z) {
   return true;
 }
 
+/// Key u to its segment's next free place in `grouped` (seg: the segments' next free places).
+__device__ __forceinline__ void scatterKey(unsigned long long u, int shift,
+                                           unsigned int* __restrict__ seg,
+                                           unsigned long long* __restrict__ grouped) {
+  grouped[atomicAdd(seg + (u >> shift), 1u)] = u;
+}
+
+/// The place in the order of key u, at place k of `grouped` (seg[g]: the end of segment g): its
+/// segment's start plus the number of the segment's keys below it (equal keys, which a query
+/// never emits, by their places in `grouped`, so no place is taken twice).
+__device__ __forceinline__ std::uint32_t placeInOrder(const unsigned long long* __restrict__ grouped,
+                                                      std::uint32_t k, unsigned long long u,
+                                                      int shift,
+                                                      const unsigned int* __restrict__ seg) {
+  const auto g = static_cast<std::uint32_t>(u >> shift);
+  const std::uint32_t first = g > 0 ? seg[g - 1] : 0, end = seg[g];
+  std::uint32_t place = first;
+  for (std::uint32_t j = first; j < end; ++j) {
+    const unsigned long long v = grouped[j];
+    place += (v < u || (v == u && j < k)) ? 1u : 0u;
+  }
+  return place;
+}
+
 /// The counting order, step 2 (after the exclusive scan of the segments' counts, `seg`): each
 /// of the n keys goes to its segment's next free place in `grouped`; `seg[g]` ends as the end of
 /// segment g (the start of g + 1).
@@ -1451,16 +1482,13 @@ __global__ void scatterPairsKernel(OrderSizes z, const unsigned long long* __res
                                    unsigned long long* __restrict__ grouped) {
   if (!resolve(z)) return;
   for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.n;
-       k += gridDim.x * blockDim.x) {
-    const unsigned long long u = keys[k];
-    grouped[atomicAdd(seg + (u >> shift), 1u)] = u;
-  }
+       k += gridDim.x * blockDim.x)
+    scatterKey(keys[k], shift, seg, grouped);
 }
 
-/// The counting order, step 3: each key's place is its segment's start plus the number of keys
-/// of the segment (at most segmentMax()) below it (equal keys, which a query never emits, would
-/// be ranked by their place in `grouped`, so no place is taken twice); the first `unpack` places
-/// are delivered (deliverPair), the first `give` of them written.
+/// The counting order, step 3: each key's place (placeInOrder: a segment holds at most
+/// segmentMax() keys); the first `unpack` places are delivered (deliverPair), the first `give`
+/// of them written.
 __global__ void rankPairsKernel(OrderSizes z, const unsigned long long* __restrict__ grouped,
                                 int shift, const unsigned int* __restrict__ seg, int b_bits,
                                 uint2* __restrict__ out, int a_bits, unsigned long long* kinds) {
@@ -1468,13 +1496,7 @@ __global__ void rankPairsKernel(OrderSizes z, const unsigned long long* __restri
   for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.n;
        k += gridDim.x * blockDim.x) {
     const unsigned long long u = grouped[k];
-    const auto g = static_cast<std::uint32_t>(u >> shift);
-    const std::uint32_t first = g > 0 ? seg[g - 1] : 0, end = seg[g];
-    std::uint32_t place = first;
-    for (std::uint32_t j = first; j < end; ++j) {
-      const unsigned long long v = grouped[j];
-      place += (v < u || (v == u && j < k)) ? 1u : 0u;
-    }
+    const std::uint32_t place = placeInOrder(grouped, k, u, shift, seg);
     if (place < z.unpack) deliverPair(place, u, z.give, b_bits, out, a_bits, kinds);
   }
 }
@@ -1488,6 +1510,74 @@ __global__ void copyPairsOutKernel(OrderSizes z, const uint2* __restrict__ from,
   for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.give;
        k += gridDim.x * blockDim.x)
     stage[k] = from[k];
+}
+
+/// The block size of orderPairsKernel.
+constexpr int kOrderBlock = 256;
+
+/// The counting order in one cooperative launch (KDET_FCL_CUDA_FUSED_ORDER; every block
+/// resident, so that the grid can wait for itself): the exclusive scan of the `segments`
+/// counts in `seg` (each block sums its share into sums[block], the grid meets, each block scans
+/// its share from the sums before it), the scatter (as scatterPairsKernel), the rank and the
+/// delivery (as rankPairsKernel), with the grid meeting between the steps; and, where `stage` is
+/// set and the `give` pairs are at most `most`, each delivered pair also written there (what
+/// copyPairsOutKernel does after the rank). One launch instead of five (the scan's two, the
+/// scatter, the rank, the copy), each of which costs a few microseconds on its own. Sized as
+/// the steps it replaces (z: OrderSizes, resolved on the device in every block alike, so that no
+/// block waits at a meeting the others skip).
+__global__ void __launch_bounds__(kOrderBlock)
+    orderPairsKernel(OrderSizes z, const unsigned long long* __restrict__ keys, int shift,
+                     unsigned int* __restrict__ seg, std::uint32_t segments,
+                     unsigned int* __restrict__ sums, unsigned long long* __restrict__ grouped,
+                     int b_bits, uint2* __restrict__ out, int a_bits,
+                     unsigned long long* kinds, uint2* __restrict__ stage, std::uint32_t most) {
+  if (!resolve(z) || z.n == 0) return;
+  const cg::grid_group grid = cg::this_grid();
+  using Reduce = cub::BlockReduce<unsigned int, kOrderBlock>;
+  using Scan = cub::BlockScan<unsigned int, kOrderBlock>;
+  __shared__ union {
+    typename Reduce::TempStorage reduce;
+    typename Scan::TempStorage scan;
+  } tmp;
+  __shared__ unsigned int base;
+  // 1. This block's share of the segments, summed.
+  const std::uint32_t per = (segments + gridDim.x - 1) / gridDim.x;
+  const std::uint32_t lo = min(segments, blockIdx.x * per), hi = min(segments, lo + per);
+  unsigned int sum = 0;
+  for (std::uint32_t g = lo + threadIdx.x; g < hi; g += kOrderBlock) sum += seg[g];
+  sum = Reduce(tmp.reduce).Sum(sum);
+  if (threadIdx.x == 0) sums[blockIdx.x] = sum;
+  grid.sync();
+  // 2. Its start (the shares before it), then its share scanned in place.
+  unsigned int before = 0;
+  for (unsigned int b = threadIdx.x; b < blockIdx.x; b += kOrderBlock) before += sums[b];
+  __syncthreads();  // (tmp reused)
+  before = Reduce(tmp.reduce).Sum(before);
+  if (threadIdx.x == 0) base = before;
+  __syncthreads();
+  unsigned int running = base;
+  for (std::uint32_t g0 = lo; g0 < hi; g0 += kOrderBlock) {
+    const std::uint32_t g = g0 + threadIdx.x;
+    const unsigned int c = g < hi ? seg[g] : 0u;
+    unsigned int start = 0, all = 0;
+    Scan(tmp.scan).ExclusiveSum(c, start, all);
+    if (g < hi) seg[g] = running + start;
+    running += all;
+    __syncthreads();  // (tmp reused)
+  }
+  grid.sync();
+  // 3. Each key to its segment's next free place.
+  const std::uint32_t stride = gridDim.x * kOrderBlock;
+  for (std::uint32_t k = blockIdx.x * kOrderBlock + threadIdx.x; k < z.n; k += stride)
+    scatterKey(keys[k], shift, seg, grouped);
+  grid.sync();
+  // 4. Each key's rank within its segment, and its delivery.
+  uint2* const copy = stage != nullptr && z.give <= most ? stage : nullptr;
+  for (std::uint32_t k = blockIdx.x * kOrderBlock + threadIdx.x; k < z.n; k += stride) {
+    const unsigned long long u = grouped[k];
+    const std::uint32_t place = placeInOrder(grouped, k, u, shift, seg);
+    if (place < z.unpack) deliverPair(place, u, z.give, b_bits, out, a_bits, kinds, copy);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1702,6 +1792,9 @@ struct Context {
                             // kPairCountWords counters of the last pass
   PinnedBuffer readback;    // sorted pairs on their way into the result
   std::size_t last_host_pairs = 0;  // the pairs of the last query into a host result (runQuery)
+  // orderPairsKernel's resident blocks per SM (0: the device has no cooperative launch), -1:
+  // not asked yet (orderBlocksPerSm).
+  int order_blocks_per_sm = -1;
   staging::CopyPool copy_pool;  // the threads of pooled read-backs (results kept by the caller)
 
   std::list<CachedMesh<float>> meshes_f;
@@ -2465,6 +2558,28 @@ bool countOrderForced() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER",
 /// the counting order, KDET_FCL_CUDA_COUNT_ORDER not 0). Read at every query.
 bool oneTripOn() { return detail::switchKnob("KDET_FCL_CUDA_ONE_TRIP", true); }
 
+/// The counting order in one cooperative launch (orderPairsKernel), or in its five launches (0):
+/// KDET_FCL_CUDA_FUSED_ORDER = k, 0 to 32 (default 2), the launch's blocks per SM in one trip,
+/// where the pairs are not known yet (at most as many as fit at once; after the counts, as many
+/// as the pairs fill). Read at every query.
+int fusedOrderBlocks() {
+  return static_cast<int>(detail::numberKnob("KDET_FCL_CUDA_FUSED_ORDER", 0, 32, 2));
+}
+
+/// orderPairsKernel's blocks that fit on one SM at once, 0 where the device has no cooperative
+/// launch (then the order takes its five launches). Asked once.
+int orderBlocksPerSm(Context& ctx) {
+  if (ctx.order_blocks_per_sm < 0) {
+    int coop = 0, per_sm = 0;
+    CUDA_TRY(cudaDeviceGetAttribute(&coop, cudaDevAttrCooperativeLaunch, 0));
+    if (coop != 0)
+      CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, orderPairsKernel,
+                                                             kOrderBlock, 0));
+    ctx.order_blocks_per_sm = per_sm;
+  }
+  return ctx.order_blocks_per_sm;
+}
+
 /// The most pairs of one segment that the counting order ranks (each pair of a segment reads the
 /// whole segment): kSegmentMax, or KDET_FCL_CUDA_COUNT_ORDER_SEGMENT (1 .. kSegmentMaxLimit).
 /// Read at every query.
@@ -2594,7 +2709,18 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   const unsigned int seg_max = segmentMax();
   const bool staged = stagedPairs();
   ctx.profile.staged_pairs = staged;
-  if (counting) ctx.segs.reserve(segments);
+  // The fused order's grid in one trip (0: five launches), and the most blocks it may have
+  // after the counts (all that fit at once); its blocks' sums follow the segments' counts.
+  unsigned int order_grid = 0, order_most = 0;
+  if (counting) {
+    const int fit = orderBlocksPerSm(ctx);
+    const int per_sm = std::min(fusedOrderBlocks(), fit);
+    if (per_sm > 0) {
+      order_grid = static_cast<unsigned int>(per_sm * g_num_sms);
+      order_most = static_cast<unsigned int>(fit * g_num_sms);
+    }
+    ctx.segs.reserve(segments + order_most);
+  }
   unsigned long long* const kind_counts = kinds ? ctx.kindCounts() : nullptr;
   // Where the order delivers the pairs: the caller's device buffer, or `spare`, a key buffer
   // the order no longer needs (the counting order's: ctx.pairs, read at each use, as it may
@@ -2603,11 +2729,39 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     return reinterpret_cast<uint2*>(dev != nullptr ? static_cast<void*>(dev->ptr) : spare);
   };
   // The counting order: the segments' starts (in place), each key into its segment, its rank
-  // there (the order of the sort, in three light kernels instead of the sort's passes), sized
-  // by z (OrderSizes: from the host, or from the pass's counters).
+  // there (the order of the sort, in light steps instead of the sort's passes: one cooperative
+  // launch, orderPairsKernel, or the scan's two launches and three kernels), sized by z
+  // (OrderSizes: from the host, or from the pass's counters).
   const int order_shift = b_bits + seg_shift;
-  auto countingOrder = [&](const OrderSizes& z, unsigned int blocks) {
+  // With `stage` (a host result in one trip), the pairs also go to the mapped stage when they
+  // are at most `most`.
+  auto countingOrder = [&](const OrderSizes& z, unsigned int blocks, uint2* stage,
+                           std::uint32_t most) {
     unsigned int* const seg = ctx.segs.data();
+    if (order_grid > 0) {
+      cudaLaunchConfig_t cfg = {};
+      // In one trip (z.w set) the pairs are not known yet: k blocks per SM at most
+      // (KDET_FCL_CUDA_FUSED_ORDER); after the counts, as many as the pairs fill (`blocks`), at
+      // least one per SM (the scan's shares) and at most all that fit.
+      cfg.gridDim = dim3(z.w != nullptr
+                             ? std::max(1u, std::min(order_grid, blocks))
+                             : std::min(order_most,
+                                        std::max(blocks, static_cast<unsigned int>(g_num_sms))));
+      ctx.profile.order_blocks = cfg.gridDim.x;
+      cfg.blockDim = dim3(kOrderBlock);
+      cfg.stream = s;
+      cudaLaunchAttribute coop = {};
+      coop.id = cudaLaunchAttributeCooperative;
+      coop.val.cooperative = 1;
+      cfg.attrs = &coop;
+      cfg.numAttrs = 1;
+      CUDA_TRY(cudaLaunchKernelEx(&cfg, orderPairsKernel, z,
+                                  static_cast<const unsigned long long*>(ctx.pairs.data()),
+                                  order_shift, seg, static_cast<std::uint32_t>(segments),
+                                  seg + segments, ctx.pairs_sorted.data(), b_bits,
+                                  delivery(ctx.pairs.data()), a_bits, kind_counts, stage, most));
+      return;
+    }
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
       return cub::DeviceScan::ExclusiveSum(tmp, bytes, seg, seg, static_cast<int>(segments), s);
     });
@@ -2617,6 +2771,12 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     rankPairsKernel<<<blocks, 256, 0, s>>>(z, ctx.pairs_sorted.data(), order_shift, seg, b_bits,
                                            delivery(ctx.pairs.data()), a_bits, kind_counts);
     checkLaunch();
+    if (stage != nullptr) {
+      copyPairsOutKernel<<<std::min<unsigned int>(blocksFor(most, 256),
+                                                  static_cast<unsigned int>(2 * g_num_sms)),
+                           256, 0, s>>>(z, delivery(ctx.pairs.data()), stage, most);
+      checkLaunch();
+    }
   };
   // One trip (oneTripOn): each pass queues the counting order behind its exact tests, and a
   // host result of at most one read-back chunk (copy_most pairs) its copy into the stage, all
@@ -2680,16 +2840,11 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     if (one_trip) {
       ctx.record(2);
       // A grid for the most keys the pass can have stored; its threads loop over the n there.
-      countingOrder(trip, std::min<unsigned int>(blocksFor(std::min(cap, trip.sorted_cap), 256),
-                                                 static_cast<unsigned int>(8 * g_num_sms)));
-      if (copy_most > 0) {
-        copyPairsOutKernel<<<std::min<unsigned int>(blocksFor(copy_most, 256),
-                                                    static_cast<unsigned int>(2 * g_num_sms)),
-                             256, 0, s>>>(trip, delivery(ctx.pairs.data()),
-                                          static_cast<uint2*>(ctx.readback.deviceData()),
-                                          copy_most);
-        checkLaunch();
-      }
+      countingOrder(trip,
+                    std::min<unsigned int>(blocksFor(std::min(cap, trip.sorted_cap), 256),
+                                           static_cast<unsigned int>(8 * g_num_sms)),
+                    copy_most > 0 ? static_cast<uint2*>(ctx.readback.deviceData()) : nullptr,
+                    copy_most);
     }
     CUDA_TRY(cudaMemcpyAsync(ctx.hostCount(), w, kPairCountWords * sizeof(unsigned long long),
                              cudaMemcpyDeviceToHost, s));
@@ -2763,7 +2918,9 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   // The one trip copied the pairs into the stage already.
   const bool from_stage = tripped && dev == nullptr && copy_most > 0 && m <= copy_most;
   unsigned long long* in = ctx.pairs.data();  // receives the pairs in TrianglePair layout
-  if (give > 0 || (kinds && m > 0)) {
+  const bool delivers = give > 0 || (kinds && m > 0);
+  if (!(counted && delivers)) ctx.profile.order_blocks = 0;  // (as pairs_counted)
+  if (delivers) {
     ctx.profile.pairs_counted = counted;
     ctx.profile.one_trip = tripped;
     ctx.profile.one_trip_copy = from_stage;
@@ -2785,7 +2942,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
         z.n = static_cast<std::uint32_t>(n);
         z.unpack = static_cast<std::uint32_t>(unpack);
         z.give = static_cast<std::uint32_t>(give);
-        countingOrder(z, blocksFor(n, 256));
+        countingOrder(z, blocksFor(n, 256), nullptr, 0);
       } else {
         cub::DoubleBuffer<unsigned long long> keys(ctx.pairs.data(), ctx.pairs_sorted.data());
         const int bits = a_bits + b_bits + (kinds ? 2 : 0);
@@ -3496,6 +3653,7 @@ void readEveryKnob() {
   (void)filterDecides();
   (void)countOrderAllowed();
   (void)oneTripOn();
+  (void)fusedOrderBlocks();
   (void)segmentMax();
   (void)roundCandidateLimit(1);
   (void)tileSize();

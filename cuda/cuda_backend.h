@@ -62,7 +62,11 @@
 // into the page-locked stage in the same trip, so the host waits once per pass for the counts
 // and the pairs (any pair count; the radix sort still runs, after the counts, where a segment
 // holds more than 1024; not for a host result after one of more than kOneTripMaxChunks
-// chunks; KDET_FCL_CUDA_ONE_TRIP=0: the counts first, then the order; read at every query). The warp-wide candidate scan passes the entries of the levels above a query's own by
+// chunks; KDET_FCL_CUDA_ONE_TRIP=0: the counts first, then the order; read at every query). The
+// counting order's steps (the scan, the scatter, the rank, the copy into the stage) run as one
+// cooperative launch whose grid meets between them: in one trip k blocks per SM, at most as many
+// as fit at once (KDET_FCL_CUDA_FUSED_ORDER=k, default 2; 0: five launches; read at every
+// query), after the counts as many as the pairs fill. The warp-wide candidate scan passes the entries of the levels above a query's own by
 // the size rule without loading their diameters (KDET_FCL_CUDA_SIZE_BY_LEVEL=0 loads them), and
 // a self query of a mesh of at most 1.5 vertices per triangle applies the adjacency rule by
 // vertex index in phase 1, leaving the pairs that share a vertex by coordinates alone to the
@@ -266,6 +270,9 @@ struct QueryProfile {
   bool one_trip_copy = false;  ///< and a host result's pairs (at most one read-back chunk,
                                ///< KDET_FCL_CUDA_DOWNLOAD_CHUNK) came in that same trip, written
                                ///< by a kernel into the page-locked stage
+  unsigned int order_blocks = 0;  ///< the counting order ran as one cooperative launch of this
+                                  ///< many blocks (KDET_FCL_CUDA_FUSED_ORDER); 0: in five
+                                  ///< launches, or not counted
 };
 void setProfiling(bool on);
 QueryProfile lastQueryProfile();

@@ -402,6 +402,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_ORDER", on_off, not_on_off},
       {"KDET_FCL_CUDA_ONE_TRIP", on_off, not_on_off},
+      {"KDET_FCL_CUDA_FUSED_ORDER", {"0", "1", "2", "32"}, {"33", "-1", "two"}},
       {"KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", {"1", "256", "65536"}, {"0", "65537", "1k"}},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_FILTER_DECIDES", on_off, not_on_off},
@@ -1574,7 +1575,10 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // (KDET_FCL_CUDA_ONE_TRIP=0). Every host result here fits one 256 KiB read-back chunk (32,768
   // pairs), so the one trip also brings the pairs (one_trip_copy), the joint ones dealt out to
   // the three results from there (OneTripBringsSmallHostResultsAndStepsAsideForLargeOnes has the
-  // limits).
+  // limits). And the counting order both as one cooperative launch (KDET_FCL_CUDA_FUSED_ORDER:
+  // in one trip by default 2 blocks per SM; 1; 32, more than fit at once: as many as fit; after
+  // the counts at least one per SM) and in its five launches (0), in one trip and in two;
+  // order_blocks says which ran.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -1582,16 +1586,37 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // 256 KiB read-back chunks, whatever the run's knob (the expectations of one_trip_copy and of
   // the rule after large host results are those of the default chunk).
   kdet_test::ScopedEnv whole_chunks("KDET_FCL_CUDA_DOWNLOAD_CHUNK", nullptr);
+  int sms = 0;
+  ASSERT_EQ(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, 0), cudaSuccess);
   cuda::setProfiling(true);
-  for (const bool trip : {true, false}) {
+  struct Config {
+    bool trip;
+    const char* fused;    // KDET_FCL_CUDA_FUSED_ORDER (nullptr: the default, 2)
+    unsigned int most;    // the fused order's blocks at most (0: five launches)
+  };
+  const unsigned int all_sms = static_cast<unsigned int>(sms);
+  for (const Config config :
+       {Config{true, nullptr, 2 * all_sms}, Config{true, "0", 0}, Config{true, "1", all_sms},
+        Config{true, "32", 32 * all_sms}, Config{false, nullptr, 32 * all_sms},
+        Config{false, "0", 0}}) {
+    const bool trip = config.trip;
     kdet_test::ScopedEnv trip_knob("KDET_FCL_CUDA_ONE_TRIP", trip ? "1" : "0");
-    const std::string trips = trip ? ", one trip" : ", two trips";
-    // Whether the last query counted its pairs as `counted` says, in one trip where it should.
+    kdet_test::ScopedEnv fused_knob("KDET_FCL_CUDA_FUSED_ORDER", config.fused);
+    const std::string trips = std::string(trip ? ", one trip" : ", two trips") +
+                              ", fused order " + (config.fused ? config.fused : "by default");
+    // Whether the last query counted its pairs as `counted` says, in one trip where it should,
+    // in one launch where it should.
     auto expectCounted = [&](bool counted, const std::string& what) {
       const cuda::QueryProfile p = cuda::lastQueryProfile();
       EXPECT_EQ(p.pairs_counted, counted) << what << trips;
       EXPECT_EQ(p.one_trip, trip && counted) << what << trips;
       if (!p.one_trip) EXPECT_FALSE(p.one_trip_copy) << what << trips;
+      if (counted && config.most > 0) {
+        EXPECT_GE(p.order_blocks, trip ? 1u : all_sms) << what << trips;
+        EXPECT_LE(p.order_blocks, config.most) << what << trips;
+      } else {
+        EXPECT_EQ(p.order_blocks, 0u) << what << trips;
+      }
     };
     // `query()` by default, with counting forced and with the radix sort: the same pairs each
     // time; `by_default` and `forced`: whether those two counted.
@@ -1787,6 +1812,7 @@ TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOne
     EXPECT_EQ(p.one_trip, trip) << what;
     EXPECT_EQ(p.one_trip_copy, copy) << what;
     EXPECT_EQ(p.pairs_counted, counted) << what;
+    EXPECT_EQ(p.order_blocks > 0, counted) << what;  // (one launch by default)
   };
   (void)intersectSelf(small, on(Backend::Cuda));  // the last host result small
   step("300 pairs", small, 0, want_small, true, true, true);
