@@ -1368,7 +1368,7 @@ __global__ void shiftIndicesKernel(std::uint32_t n, std::uint32_t by, std::uint3
 
 /// Delivers the pair with key `u` at place k of the sorted order (k below the m delivered):
 /// written to out[k] in TrianglePair layout {a, b} when k < limit (out: the key buffer the order
-/// no longer needs, or the caller's device buffer), and to copy[k] too where copy is set (the
+/// no longer needs, or the caller's device buffer), or to copy[k] instead where copy is set (the
 /// host's mapped stage: orderPairsKernel). With `kinds` (two meshes hashed as one: the
 /// pair's kind in the bits of a from a_bits up, selfExactKernel), also counts the pairs of kinds
 /// 1 and 2 into kinds[0] and kinds[1] and clears the kind from a: the host knows where each
@@ -1382,8 +1382,7 @@ __device__ __forceinline__ void deliverPair(std::uint32_t k, unsigned long long 
   const unsigned int a_mask = kinds != nullptr ? (1u << a_bits) - 1 : ~0u;
   if (k < limit) {
     const uint2 p = make_uint2(a & a_mask, static_cast<unsigned int>(u & ((1ull << b_bits) - 1)));
-    out[k] = p;
-    if (copy != nullptr) copy[k] = p;
+    (copy != nullptr ? copy : out)[k] = p;
   }
   if (kinds != nullptr) {
     // The keys are in order (or in segments of one kind), so a warp's lanes mostly share one
@@ -1474,16 +1473,41 @@ __device__ __forceinline__ std::uint32_t placeInOrder(const unsigned long long* 
   return place;
 }
 
+/// The keys' scatter over the threads of a launch (grid-stride): each of the n keys to its
+/// segment's next free place (scatterKey). Shared by scatterPairsKernel and orderPairsKernel.
+__device__ __forceinline__ void scatterKeys(std::uint32_t n,
+                                            const unsigned long long* __restrict__ keys, int shift,
+                                            unsigned int* __restrict__ seg,
+                                            unsigned long long* __restrict__ grouped) {
+  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < n;
+       k += gridDim.x * blockDim.x)
+    scatterKey(keys[k], shift, seg, grouped);
+}
+
+/// The keys' ranks over the threads of a launch (grid-stride): each key's place
+/// (placeInOrder), and the first z.unpack places delivered (deliverPair: the first z.give
+/// written, to `copy` instead of `out` where copy is set). Shared by rankPairsKernel and
+/// orderPairsKernel.
+__device__ __forceinline__ void rankKeys(const OrderSizes& z,
+                                         const unsigned long long* __restrict__ grouped,
+                                         int shift, const unsigned int* __restrict__ seg,
+                                         int b_bits, uint2* __restrict__ out, int a_bits,
+                                         unsigned long long* kinds, uint2* __restrict__ copy) {
+  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.n;
+       k += gridDim.x * blockDim.x) {
+    const unsigned long long u = grouped[k];
+    const std::uint32_t place = placeInOrder(grouped, k, u, shift, seg);
+    if (place < z.unpack) deliverPair(place, u, z.give, b_bits, out, a_bits, kinds, copy);
+  }
+}
+
 /// The counting order, step 2 (after the exclusive scan of the segments' counts, `seg`): each
 /// of the n keys goes to its segment's next free place in `grouped`; `seg[g]` ends as the end of
 /// segment g (the start of g + 1).
 __global__ void scatterPairsKernel(OrderSizes z, const unsigned long long* __restrict__ keys,
                                    int shift, unsigned int* __restrict__ seg,
                                    unsigned long long* __restrict__ grouped) {
-  if (!resolve(z)) return;
-  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.n;
-       k += gridDim.x * blockDim.x)
-    scatterKey(keys[k], shift, seg, grouped);
+  if (resolve(z)) scatterKeys(z.n, keys, shift, seg, grouped);
 }
 
 /// The counting order, step 3: each key's place (placeInOrder: a segment holds at most
@@ -1492,13 +1516,7 @@ __global__ void scatterPairsKernel(OrderSizes z, const unsigned long long* __res
 __global__ void rankPairsKernel(OrderSizes z, const unsigned long long* __restrict__ grouped,
                                 int shift, const unsigned int* __restrict__ seg, int b_bits,
                                 uint2* __restrict__ out, int a_bits, unsigned long long* kinds) {
-  if (!resolve(z)) return;
-  for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < z.n;
-       k += gridDim.x * blockDim.x) {
-    const unsigned long long u = grouped[k];
-    const std::uint32_t place = placeInOrder(grouped, k, u, shift, seg);
-    if (place < z.unpack) deliverPair(place, u, z.give, b_bits, out, a_bits, kinds);
-  }
+  if (resolve(z)) rankKeys(z, grouped, shift, seg, b_bits, out, a_bits, kinds, nullptr);
 }
 
 /// One trip, the last step: the `give` pairs delivered, straight into the page-locked stage of
@@ -1520,8 +1538,8 @@ constexpr int kOrderBlock = 256;
 /// counts in `seg` (each block sums its share into sums[block], the grid meets, each block scans
 /// its share from the sums before it), the scatter (as scatterPairsKernel), the rank and the
 /// delivery (as rankPairsKernel), with the grid meeting between the steps; and, where `stage` is
-/// set and the `give` pairs are at most `most`, each delivered pair also written there (what
-/// copyPairsOutKernel does after the rank). One launch instead of five (the scan's two, the
+/// set and the `give` pairs are at most `most`, each delivered pair written there instead (where
+/// copyPairsOutKernel copies them after the rank). One launch instead of five (the scan's two, the
 /// scatter, the rank, the copy), each of which costs a few microseconds on its own. Sized as
 /// the steps it replaces (z: OrderSizes, resolved on the device in every block alike, so that no
 /// block waits at a meeting the others skip).
@@ -1567,17 +1585,12 @@ __global__ void __launch_bounds__(kOrderBlock)
   }
   grid.sync();
   // 3. Each key to its segment's next free place.
-  const std::uint32_t stride = gridDim.x * kOrderBlock;
-  for (std::uint32_t k = blockIdx.x * kOrderBlock + threadIdx.x; k < z.n; k += stride)
-    scatterKey(keys[k], shift, seg, grouped);
+  scatterKeys(z.n, keys, shift, seg, grouped);
   grid.sync();
-  // 4. Each key's rank within its segment, and its delivery.
-  uint2* const copy = stage != nullptr && z.give <= most ? stage : nullptr;
-  for (std::uint32_t k = blockIdx.x * kOrderBlock + threadIdx.x; k < z.n; k += stride) {
-    const unsigned long long u = grouped[k];
-    const std::uint32_t place = placeInOrder(grouped, k, u, shift, seg);
-    if (place < z.unpack) deliverPair(place, u, z.give, b_bits, out, a_bits, kinds, copy);
-  }
+  // 4. Each key's rank within its segment, and its delivery (into the stage alone where the
+  // pairs fit it: the host reads them from there, runQuery's from_stage).
+  rankKeys(z, grouped, shift, seg, b_bits, out, a_bits, kinds,
+           stage != nullptr && z.give <= most ? stage : nullptr);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1916,15 +1929,18 @@ std::uint32_t rehashCap(std::uint32_t cap) {
 /// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
 bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", true); }
 
-/// Triangles up to which a re-hash without read-back groups its entries by counting. H100, the
-/// counting build (one thread per entry) against the sort, gpu_bench, three rounds in one run
-/// (benchmarks/RESULTS-gpu.md), ms of build and of frame: the UNC cloth ball (92k) 0.15-0.16
-/// against 0.20-0.21 and 0.82-0.83 against 0.86-0.88; the 200k and 250k cloths 0.04 ms less
-/// build and 0.02-0.06 less frame; the cloth ball's two frames as one hash (184k) 0.03-0.06
-/// less build but 0.05-0.09 more frame; the 1M cloth even (0.53-0.61 against 0.54-0.64); the
-/// 10M cloth 5.7 against 4.6 of build, 15.4 against 12.9 of frame. So the rule stays below the
-/// two frames' size.
-constexpr std::size_t kCountBuildMaxTriangles = 150000;
+/// Triangles up to which a re-hash without read-back groups its entries by counting. H100,
+/// gpu_bench, the counting build (one thread per entry) against the sort in alternating rounds in
+/// one run (benchmarks/RESULTS-gpu.md), ms of build and of frame. 2026-11-23: the UNC cloth ball
+/// (92k) 0.15-0.16 against 0.20-0.21 and 0.82-0.83 against 0.86-0.88; the 1M cloth even; the
+/// 10M cloth 5.7 against 4.6 of build, 15.4 against 12.9 of frame. 2026-11-24 (the code of that
+/// day, three rounds each): the 200k and 250k cloths 0.14-0.16 against 0.18-0.20 of build and
+/// 0.452-0.534 against 0.502-0.555 of frame; the joint two cloth-ball frames (184k) 0.14 against
+/// 0.20 and 1.38-1.39 against 1.42-1.48 (slower per frame the day before); the joint two n-body
+/// frames (293k) 0.20 against 0.23-0.29 and 0.64-0.67 against 0.69-0.87; the 1M cloth level
+/// again (1.34-1.48 against 1.32-1.45). So the rule covers the sizes where the count was
+/// measured faster, up to 300k.
+constexpr std::size_t kCountBuildMaxTriangles = 300000;
 
 /// Whether a re-hash without read-back of `nt` triangles groups its entries by counting instead
 /// of sorting them (countFillKernel): KDET_FCL_CUDA_COUNT_BUILD = 0 (never), 1 (always), unset

@@ -929,6 +929,59 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   }
 }
 
+TEST(CudaQuery, CoplanarPairsOfTheExactKernelAreTheCpus) {
+  // Two triangulated sheets in one plane, the second shifted by a fraction of a cell: every pair
+  // across them is exactly coplanar, so the plane filter decides none and the exact kernel takes
+  // each through its 2D branch (coplanarProper): overlapping pairs, pairs that touch at a vertex
+  // or along an edge, and near misses. Once in the plane z = 0 and once in a skew plane (points
+  // on a lattice of dyadic steps: exactly coplanar in float too); with the buffers capped, every
+  // pass overflows and reruns. The pairs are the CPU's.
+  KDET_SKIP_WITHOUT_DEVICE();
+  const int n = 24;
+  const double h = 1.0 / 64;
+  const Vec3<double> planes[2][2] = {{{h, 0, 0}, {0, h, 0}}, {{2 * h, h, -h}, {-h, 3 * h, 2 * h}}};
+  for (const auto& E : planes) {
+    TriangleMesh<float> m;
+    auto at = [&](double u, double w) {
+      return Vec3<float>{float(0.5 + u * E[0].x + w * E[1].x),
+                         float(-0.25 + u * E[0].y + w * E[1].y),
+                         float(0.75 + u * E[0].z + w * E[1].z)};
+    };
+    for (const double shift : {0.0, 0.5})
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const double u = i + shift, w = j + shift / 2;
+          m.addTriangle(at(u, w), at(u + 1, w), at(u, w + 1));
+          m.addTriangle(at(u + 1, w), at(u + 1, w + 1), at(u, w + 1));
+        }
+    HashedMesh<float> sheets(m);
+    HashedMesh<double> sheets_d(kdet_test::convert<double>(m));
+    const auto cpu = sorted(intersectSelf(sheets).pairs);
+    ASSERT_EQ(cpu, sorted(intersectSelf(sheets_d).pairs));
+    ASSERT_GT(cpu.size(), 1000u);
+    for (const char* cap : {"", "3"}) {
+      kdet_test::ScopedEnv c("KDET_FCL_CUDA_PAIR_CAPACITY", cap);
+      const std::string what = std::string("plane ") + (E[0].y == 0 ? "z = const" : "skew") +
+                               " cap '" + cap + "'";
+#if KDET_FCL_TEST_HAVE_CUDA
+      cuda::setProfiling(true);
+#endif
+      EXPECT_EQ(intersectSelf(sheets, on(Backend::Cuda)).pairs, cpu) << what;
+#if KDET_FCL_TEST_HAVE_CUDA
+      const cuda::QueryProfile p = cuda::lastQueryProfile();
+      // Undecided by the filter: the coplanar pairs, which intersect or not.
+      if (*cap == '\0') {
+        EXPECT_GT(p.exact_tests, cpu.size()) << what;
+      }
+#endif
+      EXPECT_EQ(intersectSelf(sheets_d, on(Backend::Cuda)).pairs, cpu) << what;
+#if KDET_FCL_TEST_HAVE_CUDA
+      cuda::setProfiling(false);
+#endif
+    }
+  }
+}
+
 TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
   // The candidate search tests sub-cell spans never (KDET_FCL_CUDA_SPANS=0), always (=1) or,
   // unset, when the last query of the same kind on the same meshes found more than 4 candidates

@@ -366,6 +366,59 @@ TEST(TriangleIntersection, RandomSmallIntegersMatchSatReferee) {
   EXPECT_LT(hits, cases - cases / 10);
 }
 
+/// Coplanar proper pairs (the exact test's 2D branch, coplanarProper): both triangles on one
+/// lattice of a plane, skew or axis-aligned, so that every point lies on it exactly; small
+/// lattices give many shared vertices, touching edges and vertices on edges. The plane is placed
+/// near the origin and far from it (offset 2^30, steps 2^-12: every coordinate still exact).
+TEST(TriangleIntersection, RandomCoplanarPairsMatchSatReferee) {
+  std::mt19937_64 rng(7);
+  int hits = 0, cases = 0;
+  const V planes[3][2] = {{{2, 1, -1}, {-1, 3, 2}},   // skew
+                          {{1, 0, 0}, {0, 1, 0}},     // z = const
+                          {{0, 1, 1}, {0, -1, 2}}};   // x = const, sheared
+  for (const auto& E : planes)
+    for (const double far : {0.0, 1.0}) {
+      const V origin = far > 0 ? V{std::ldexp(1.0, 30), -std::ldexp(1.0, 29), 3.0}
+                               : V{0.5, -1.25, 3.0};
+      const double step = far > 0 ? std::ldexp(1.0, -12) : 1.0;
+      for (int range : {1, 2, 4}) {
+        std::uniform_int_distribution<int> I(-range, range);
+        for (int it = 0; it < 1500; ++it) {
+          Tri T[2];
+          for (Tri& t : T)
+            for (V& v : t.v) {
+              const double u = step * I(rng), w = step * I(rng);
+              v = {origin.x + u * E[0].x + w * E[1].x, origin.y + u * E[0].y + w * E[1].y,
+                   origin.z + u * E[0].z + w * E[1].z};
+            }
+          bool degenerate = false;
+          for (const Tri& t : T)
+            degenerate |=
+                isZero(crossQ(sub(toQ(t.v[1]), toQ(t.v[0])), sub(toQ(t.v[2]), toQ(t.v[0]))));
+          if (degenerate) continue;
+          // Coplanar by construction (the referee's arithmetic says so too).
+          const QV n = crossQ(sub(toQ(T[0].v[1]), toQ(T[0].v[0])),
+                              sub(toQ(T[0].v[2]), toQ(T[0].v[0])));
+          for (const V& q : T[1].v) ASSERT_EQ(sgn(dotQ(n, sub(toQ(q), toQ(T[0].v[0])))), 0);
+          const bool ref = satReferee(T[0], T[1]);
+          ASSERT_EQ(test(T[0], T[1]), ref) << "case " << it;
+          ASSERT_EQ(test(T[1], T[0]), ref) << "case " << it;
+          if (it % 10 == 0) {
+            ASSERT_EQ(minkowskiReferee(T[0], T[1]), ref);
+            for (int a = 0; a < 6; ++a)
+              for (int b = 0; b < 6; ++b)
+                ASSERT_EQ(test(permuted(T[0], a), permuted(T[1], b)), ref);
+          }
+          hits += ref;
+          ++cases;
+        }
+      }
+    }
+  EXPECT_GT(cases, 15000);
+  EXPECT_GT(hits, cases / 10);
+  EXPECT_LT(hits, cases - cases / 10);
+}
+
 /// Near-touching configurations: Q has a vertex (or its edge passes) exactly at a point of P
 /// (vertex, edge point or interior point with dyadic barycentrics), optionally in P's plane, then one
 /// coordinate is moved by one ulp; coordinates get large offsets and small or large scales.

@@ -241,6 +241,42 @@ KDET_FCL_HD_NOINLINE bool segmentSegment(const Vec3<double>& p0, const Vec3<doub
   return alo <= bhi && blo <= ahi;
 }
 
+/// Two proper triangles in one plane (with exact signs: every orientation of either's vertices
+/// against the other's plane zero), decided in the projection dropping P.axis. That projection
+/// keeps P proper, so the common plane's normal has a non-zero component along the axis and the
+/// projection maps the plane one-to-one: Q's projection is proper too, and every sign below is
+/// the 3D configuration's. Two closed convex polygons are disjoint iff an edge line of one has
+/// all vertices of the other strictly on its outer side: if they are disjoint, the origin lies
+/// outside their Minkowski difference P - Q, a convex polygon, so strictly outside one of its
+/// edges; that edge's outward normal n is the outward normal of an edge of P or of -Q, and
+/// max over P of p.n < min over Q of q.n puts Q strictly beyond that edge of P (or P beyond the
+/// edge of Q). The converse is plain. So at most 18 orient2d signs (each vertex of one against
+/// each edge of the other), with a return at the first separating edge, where the edge-by-edge
+/// tests of properProperSigns take up to 90 on a disjoint coplanar pair (segmentTriangleSigns'
+/// coplanar branch, six times).
+template <class K>
+KDET_FCL_HD_NOINLINE bool coplanarProper(const Shape& P, const Shape& Q) {
+  const int axis = P.axis;
+  // The orientations of the projected triangles (non-zero: both are proper there); a vertex x is
+  // strictly outside edge (a, b) of a triangle of orientation o iff orient2d(a, b, x) o < 0.
+  const int op = orient2dProj<K>(P.v[0], P.v[1], P.v[2], axis);
+  const int oq = orient2dProj<K>(Q.v[0], Q.v[1], Q.v[2], axis);
+  for (int side = 0; side < 2; ++side) {
+    const Shape& E = side == 0 ? P : Q;  // the edges'
+    const Shape& X = side == 0 ? Q : P;  // the vertices'
+    const int o = side == 0 ? op : oq;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3<double>& a = E.v[i];
+      const Vec3<double>& b = E.v[i == 2 ? 0 : i + 1];
+      if (orient2dProj<K>(a, b, X.v[0], axis) * o < 0 &&
+          orient2dProj<K>(a, b, X.v[1], axis) * o < 0 &&
+          orient2dProj<K>(a, b, X.v[2], axis) * o < 0)
+        return false;  // a separating edge
+    }
+  }
+  return true;
+}
+
 /// Whether all three signs are equal and non-zero (three points strictly on one side of a plane).
 KDET_HD_INLINE bool strictlyOneSide(const int s[3]) {
   return s[0] != 0 && s[0] == s[1] && s[1] == s[2];
@@ -491,9 +527,14 @@ KDET_HD_INLINE bool trianglesIntersectWith(const Vec3<S>& p0, const Vec3<S>& p1,
     return tri_isect::transversalProper<K>(P, Q, sp, sq);
   const tri_isect::Shape SP = tri_isect::classify<K>(P[0], P[1], P[2]);
   const tri_isect::Shape SQ = tri_isect::classify<K>(Q[0], Q[1], Q[2]);
-  // Two proper triangles keep their vertices in order, so the signs above are theirs.
-  if (SP.kind == tri_isect::Kind::Proper && SQ.kind == tri_isect::Kind::Proper)
+  // Two proper triangles keep their vertices in order, so the signs above are theirs. With exact
+  // signs, two proper triangles here lie in one plane (all six signs zero): the 2D test.
+  if (SP.kind == tri_isect::Kind::Proper && SQ.kind == tri_isect::Kind::Proper) {
+    if (K::kExactSigns && sp[0] == 0 && sp[1] == 0 && sp[2] == 0 && sq[0] == 0 && sq[1] == 0 &&
+        sq[2] == 0)
+      return tri_isect::coplanarProper<K>(SP, SQ);
     return tri_isect::properProperSigns<K>(SP, SQ, sp, sq);
+  }
   return tri_isect::shapesIntersect<K>(SP, SQ);
 }
 
