@@ -63,12 +63,13 @@
 // and the pairs (any pair count; the radix sort still runs, after the counts, where a segment
 // holds more than 1024; not for a host result after one of more than kOneTripMaxChunks
 // chunks; KDET_FCL_CUDA_ONE_TRIP=0: the counts first, then the order; read at every query). The
-// counting order's steps (the scan, the scatter, the rank, the copy into the stage) run as one
-// cooperative launch whose grid meets between them: in one trip k blocks per SM, at most as many
-// as fit at once (KDET_FCL_CUDA_FUSED_ORDER=k, default 2; 0: five launches; read at every
-// query), after the counts as many as the pairs fill. The warp-wide candidate scan passes the entries of the levels above a query's own by
-// the size rule without loading their diameters (KDET_FCL_CUDA_SIZE_BY_LEVEL=0 loads them), and
-// a self query of a mesh of at most 1.5 vertices per triangle applies the adjacency rule by
+// counting order's steps (the scan, the scatter, the rank and delivery, a small host result's
+// straight into the stage) run as one cooperative launch whose grid meets between them: in one
+// trip k blocks per SM, at most as many as fit at once (KDET_FCL_CUDA_FUSED_ORDER=k, default 2;
+// 0: five launches; read at every query), after the counts as many as the pairs fill. The
+// warp-wide candidate scan passes the entries of the levels above a query's own by the size
+// rule without loading their diameters (KDET_FCL_CUDA_SIZE_BY_LEVEL=0 loads them), and a self
+// query of a mesh of at most 1.5 vertices per triangle applies the adjacency rule by
 // vertex index in phase 1, leaving the pairs that share a vertex by coordinates alone to the
 // exact kernel (KDET_FCL_CUDA_INDEX_ADJACENCY=0|1: never, always; read at every query). Uploads of deformed
 // vertices and new triangles go through pinned memory in 1 MiB chunks staged by up to 8 host

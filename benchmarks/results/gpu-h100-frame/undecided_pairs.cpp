@@ -1,10 +1,14 @@
-// Which candidate pairs does the GPU's plane filter leave undecided (CPU count, session 24)?
+// Which candidate pairs does the GPU's plane filter leave undecided (CPU count; session 24,
+// extended in session 28 to the procedural cloth: `cloth N T` builds makeDrapedCloth(N, 3, 1,
+// 0.02, T), as gpu_bench's cloth scenes do)?
 // The candidates as phase 1 finds them (boxes that overlap, no shared vertex index), by a
 // uniform grid; for each, detail::trianglesFilterVerdict; the undecided ones classified by
 // their exact zero signs. Built against the library:
 //   g++ -std=c++17 -O2 -ffp-contract=off -Iinclude undecided_pairs.cpp -Lbuild -lkdet_fcl
-//   ./a.out ../shared/data/unc/cloth-ball/cloth_ball92.ply
+//   ./a.out ../shared/data/unc/cloth-ball/cloth_ball92.ply   or   ./a.out cloth 316 1.0
 #include "kdet_fcl/mesh_io.h"
+#include "kdet_fcl/scenes.h"
+#include <string>
 #include "kdet_fcl/detail/triangle_intersection.h"
 #include <cstdio>
 #include <unordered_map>
@@ -14,7 +18,9 @@
 using namespace kdet_fcl;
 using namespace kdet_fcl::detail;
 int main(int argc, char** argv) {
-  auto m = readMesh<float>(argv[1]);
+  auto m = std::string(argv[1]) == "cloth"
+               ? makeDrapedCloth<float>(std::stoi(argv[2]), 3.f, 1.f, 0.02f, std::stof(argv[3]))
+               : readMesh<float>(argv[1]);
   const size_t n = m.numTriangles();
   std::vector<float> lo(3*n), hi(3*n);
   double avg = 0;
