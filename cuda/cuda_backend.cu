@@ -86,7 +86,7 @@ enum PairCountWord : int {
   kAllCands = 8,     // candidates of all rounds
   kMaxSurv = 9,      // the most survivors of one round
   kAllSurv = 10,     // survivors of all rounds
-  kCellCands = 11,   // of all candidates, the cells' (addCountKernel)
+  kCellCands = 11,   // of all candidates, the cells' (selfCellPairsKernel)
   kBigSegment = 12,  // set when a segment of the pairs' counting order exceeds its limit
   kPairCountWords = 13
 };
@@ -794,11 +794,6 @@ __global__ void roundEndKernel(unsigned long long* w) {
   w[kCandCount] = w[kSurvCount] = w[kWarpTasks] = w[kCellTasks] = 0;
 }
 
-/// *to += *from (one thread): the cells' share of a round's candidates, while profiling.
-__global__ void addCountKernel(const unsigned long long* from, unsigned long long* to) {
-  *to += *from;
-}
-
 template <class S>
 __global__ void mapVerticesKernel(std::uint32_t n, const Vec3<S>* __restrict__ v,
                                   Transform<double> a_to_b, Vec3<S>* __restrict__ out) {
@@ -1053,13 +1048,16 @@ __device__ __forceinline__ Aabb<S> loadBoxOf(const Aabb<S>* p) {
 /// spans) is dropped before the partner's box is loaded. The round's share of the tasks
 /// (roundTask) comes from the counter `tasks`; the grid is the resident blocks. Only the cells
 /// this build stored are read (info.cells against cell_cap; none after need_sync): a re-hash that
-/// did not fit reruns the query anyway (checkPending).
+/// did not fit reruns the query anyway (checkPending). Each warp adds the candidates it emitted
+/// to *cell_count once, at its end (the cells' share of the candidates, QueryProfile's
+/// cell_candidates and the stages' rounds), so that the share is known also when the scan of the
+/// coarser levels runs at the same time (selfOverlap()).
 template <class S, bool kSpans>
 __global__ void __launch_bounds__(kQueryBlock, 8)
     selfCellPairsKernel(HashView<S> M, const std::uint32_t* __restrict__ block_cell,
                         std::uint32_t cell_cap, std::uint32_t rows, std::uint32_t max_visit,
                         bool by_index, std::uint32_t split, Round round, PairSink cand,
-                        unsigned long long* tasks) {
+                        unsigned long long* tasks, unsigned long long* cell_count) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
   __shared__ TriIndices row_tris[kQueryBlock / 32][32];  // (by_index)
@@ -1074,6 +1072,7 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
   const std::uint32_t entries = __ldg(M.cell_begin + cells);  // the stored cells' entries
   const unsigned long long count = (entries + rows - 1ull) / rows;
   const unsigned long long mine = roundTasks(count, round);
+  unsigned long long found = 0;  // the warp's candidates (warp-uniform)
   for (unsigned long long t = nextWarpTask(tasks); t < mine; t = nextWarpTask(tasks)) {
     const unsigned long long task = roundTask(t, count, round);
     const std::uint32_t first = static_cast<std::uint32_t>(task) * rows;
@@ -1139,12 +1138,14 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
           hit = overlap && (by_index ? selfCandidateByIndex(split, i, j, row_tri[owner], tj)
                                      : selfCandidate(M, split, i, j, false));
         } while (false);
+        found += __popc(__ballot_sync(kFull, hit));
         emitFromWarp(cand, stage, hit, i < j ? i : j, i < j ? j : i);
       }
       next += cnt;
     }
   }
   finishWarp(cand, stage);
+  if (lane == 0 && found > 0) atomicAdd(cell_count, found);
 }
 
 /// Phase 1 of an inter-object query with the warp-wide scan: the same candidates as
@@ -1781,6 +1782,10 @@ struct Context {
   std::mutex mutex;
   bool ready = false;
   cudaStream_t stream = nullptr;
+  // A second stream for work that runs beside the stream's own (selfOverlap): forkSide() makes it
+  // wait for everything queued on `stream` so far, joinSide() makes `stream` wait for it.
+  cudaStream_t side = nullptr;
+  cudaEvent_t fork = nullptr, join = nullptr;
   cudaEvent_t ev[4] = {};
   // While profiling, three events per round of a query pass (markRound): before its phase 1
   // (round 0: ev[1]), after its phase 1 and after its plane filter. Created as needed.
@@ -1822,7 +1827,10 @@ struct Context {
     if (ready) return;
     CUDA_TRY(cudaSetDevice(0));
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
+    CUDA_TRY(cudaStreamCreateWithFlags(&side, cudaStreamNonBlocking));
     for (cudaEvent_t& e : ev) CUDA_TRY(cudaEventCreate(&e));
+    CUDA_TRY(cudaEventCreateWithFlags(&fork, cudaEventDisableTiming));
+    CUDA_TRY(cudaEventCreateWithFlags(&join, cudaEventDisableTiming));
     red.reserve(1);
     pair_count.reserve(kPairCountWords);
     host_small.reserve(3 * sizeof(BuildInfo) + (4 + kPairCountWords) * sizeof(unsigned long long));
@@ -1837,6 +1845,15 @@ struct Context {
   unsigned long long* hostCells() { return hostTotal() + 1; }
   unsigned long long* hostKinds() { return hostTotal() + 2; }  // 2 words (deliverPair)
   unsigned long long* hostCount() { return hostTotal() + 4; }  // kPairCountWords words
+  cudaStream_t forkSide() {
+    CUDA_TRY(cudaEventRecord(fork, stream));
+    CUDA_TRY(cudaStreamWaitEvent(side, fork, 0));
+    return side;
+  }
+  void joinSide() {
+    CUDA_TRY(cudaEventRecord(join, side));
+    CUDA_TRY(cudaStreamWaitEvent(stream, join, 0));
+  }
   unsigned long long* warpTasks() { return pair_count.data() + kWarpTasks; }
   unsigned long long* cellTasks() { return pair_count.data() + kCellTasks; }
   unsigned long long* kindCounts() { return pair_count.data() + kKindCounts; }  // 2 words
@@ -3234,6 +3251,18 @@ bool selfCellPairs(std::size_t entries) {
                 entries >= 48 * 32 * static_cast<std::size_t>(g_num_sms));
 }
 
+/// Whether a self query that takes its same-level pairs from the cells runs the cells' kernel and
+/// the scan of the coarser levels at the same time: the cells' kernel on a second stream
+/// (Context::side), forked from the query's stream by an event and joined back before the plane
+/// filter, so that the scan's blocks take the SMs that the cells' last tasks leave idle, and the
+/// other way round (both kernels are grids of the resident blocks that take their tasks from a
+/// counter, so each alone ends in a tail). Only in a round that runs both (Round::stage 0; the
+/// stages' rounds run one kernel each). Measured on an H100 (benchmarks/RESULTS-gpu.md, six
+/// rounds alternating the knob): phase 1 of the cloth ball 0.226 -> 0.172 ms, of the n-body and
+/// the 200k-1M cloths 0.016-0.053 ms less. KDET_FCL_CUDA_SELF_OVERLAP=0 runs the cells' kernel
+/// first, then the scan, on the query's stream (default 1; read at every query).
+bool selfOverlap() { return detail::switchKnob("KDET_FCL_CUDA_SELF_OVERLAP", true); }
+
 /// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least as many as the
 /// warps an H100-class SM holds (64 per SM) and the cells are not crowded (the candidates per
 /// triangle of the mesh's last self query, as spansFor, at most 4), else 8. Measured on an H100
@@ -3495,23 +3524,25 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   ctx.profile.fixed_cells = fixedCells(fixed_cells, M.info);
   ctx.profile.index_adjacency = by_index;
   ctx.profile.self_cell_pairs = cell_pairs;
+  const bool overlap = cell_pairs && selfOverlap();
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     const HashView<S> mv = M.view();
     ctx.profile.cells_by_size = M.size_ordered;
     bindInfo<S>(s, M, nullptr);
+    // (Both kernels in this round: the cells' on the side stream, joined after the scan.)
+    const bool side = overlap && round.stage == 0;
+    if (side) ctx.profile.self_overlap = true;
     if (cell_pairs && round.stage != 2) {
+      const cudaStream_t cs = side ? ctx.forkSide() : s;
       const auto kernel = spans ? selfCellPairsKernel<S, true> : selfCellPairsKernel<S, false>;
       const std::uint32_t rows = cellRows(M.info.entries, M.self_density);
       ctx.profile.cell_rows = static_cast<int>(rows);
       const unsigned int blocks = residentBlocks(
           kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
-      kernel<<<blocks, kQueryBlock, 0, s>>>(mv, M.block_cell.data(),
-                                            M.pending ? M.pending_cell_cap : M.cell_cap, rows,
-                                            warpVisit(), by_index, split, round, cand,
-                                            ctx.cellTasks());
-      checkLaunch();
-      // The round's candidates so far are the cells' (cell_candidates; the stages' rounds).
-      addCountKernel<<<1, 1, 0, s>>>(cand.count, ctx.pair_count.data() + kCellCands);
+      kernel<<<blocks, kQueryBlock, 0, cs>>>(mv, M.block_cell.data(),
+                                             M.pending ? M.pending_cell_cap : M.cell_cap, rows,
+                                             warpVisit(), by_index, split, round, cand,
+                                             ctx.cellTasks(), ctx.pair_count.data() + kCellCands);
       checkLaunch();
     }
     if (round.stage != 1) {  // (stage 1: only the cells' pairs in this round)
@@ -3537,6 +3568,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
       }
     }
     checkLaunch();
+    if (side) ctx.joinSide();
     ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {
@@ -3683,6 +3715,7 @@ void readEveryKnob() {
   (void)stagedPairs();
   (void)indexAdjacency(0, 0);
   (void)selfCellPairs(0);
+  (void)selfOverlap();
   (void)cellRows(0, 0);
   (void)minBlocksKnob();
   (void)filterMinBlocks();

@@ -47,7 +47,9 @@
 // and KDET_FCL_CUDA_WARP_TASKS=0 gives each warp one task instead of a counter to take them from;
 // KDET_FCL_CUDA_SELF_CELLS=0|1 makes a self query scan every level from each triangle's own, or
 // take the pairs within a level from the cells and scan only the coarser levels (default: the
-// cells for meshes of about 200k cell entries and more), and KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
+// cells for meshes of about 200k cell entries and more; the cells' kernel then runs beside the
+// scan of the coarser levels, on a second stream, in a round that runs both:
+// KDET_FCL_CUDA_SELF_OVERLAP=0 runs it first), and KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
 // entries per warp task of those cells' pairs (default 8 or 32 by the density; all read at every
 // query, for tests and comparisons). KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes
 // the builds never or always record, per triangle, the levels above its own that hold a cell of
@@ -250,6 +252,8 @@ struct QueryProfile {
                                  ///< scanned only coarser levels (KDET_FCL_CUDA_SELF_CELLS)
   std::size_t cell_candidates = 0;  ///< of `candidates`, those the cells gave (self_cell_pairs)
   int cell_rows = 0;  ///< entries per warp task of the cells' pairs (KDET_FCL_CUDA_CELL_ROWS)
+  bool self_overlap = false;  ///< the cells' pairs and the scan ran at the same time, on two
+                              ///< streams, in some round (KDET_FCL_CUDA_SELF_OVERLAP)
   bool self_cached = false;  ///< a self query answered from the kept result of an unchanged mesh
                              ///< (no query on the device, all times 0; the device form copies the
                              ///< kept pairs into its buffer; KDET_FCL_CUDA_SELF_CACHE=0: never)

@@ -413,6 +413,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_STAGE_PAIRS", on_off, not_on_off},
       {"KDET_FCL_CUDA_INDEX_ADJACENCY", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_CELLS", on_off, not_on_off},
+      {"KDET_FCL_CUDA_SELF_OVERLAP", on_off, not_on_off},
       {"KDET_FCL_CUDA_JOINT", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_CACHE", on_off, not_on_off},
       {"KDET_FCL_CUDA_REHASH_CAP", {"0", "100", "4294967295"}, {"-1", "4294967296", "1k"}},
@@ -1242,9 +1243,15 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
           spans("KDET_FCL_CUDA_SPANS", c.spans), rows("KDET_FCL_CUDA_CELL_ROWS", c.rows),
           stage("KDET_FCL_CUDA_STAGE_PAIRS", c.stage), cap("KDET_FCL_CUDA_PAIR_CAPACITY", c.cap);
       cuda::markDeformed(sc.mesh);  // re-hash under these keys
-      long long candidates = -1;
-      for (const char* cells : {"1", "0"}) {
-        kdet_test::ScopedEnv on_off("KDET_FCL_CUDA_SELF_CELLS", cells);
+      long long candidates = -1, cell_candidates = -1;
+      // The cells' kernel and the scan one after the other, then at the same time on two
+      // streams (KDET_FCL_CUDA_SELF_OVERLAP): the same candidates, and the same share of them
+      // from the cells, which each warp of the cells' kernel counts itself.
+      for (const char* cells : {"1", "overlap", "0"}) {
+        const bool from_cells = *cells != '0';
+        const bool overlap = std::string(cells) == "overlap";
+        kdet_test::ScopedEnv on_off("KDET_FCL_CUDA_SELF_CELLS", from_cells ? "1" : "0"),
+            side("KDET_FCL_CUDA_SELF_OVERLAP", overlap ? "1" : "0");
         const std::string what = std::string(sc.what) + ", full keys " + c.full + ", visit '" +
                                  c.visit + "', spans " + c.spans + ", rows " +
                                  (c.rows ? c.rows : "-") + ", stage " +
@@ -1254,15 +1261,22 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
         const cuda::QueryProfile p = cuda::lastQueryProfile();
         EXPECT_EQ(p.spans, *c.spans == '1') << what;
         EXPECT_EQ(p.staged_pairs, c.stage == nullptr || *c.stage == '1') << what;
+        // (Rounds of the stages, KDET_FCL_CUDA_ROUND_CANDIDATES, run the two kernels apart.)
+        EXPECT_EQ(p.self_overlap, overlap && p.cell_rounds == 0) << what;
         if (c.cap != nullptr) EXPECT_GE(p.passes, 2) << what << ": the overflow path did not run";
-        if (*cells == '1') {
+        if (from_cells) {
           EXPECT_TRUE(p.self_cell_pairs) << what;
           if (c.rows) EXPECT_EQ(p.cell_rows, std::atoi(c.rows)) << what;
           else EXPECT_TRUE(p.cell_rows == 8 || p.cell_rows == 32) << what;
           EXPECT_GT(p.cell_candidates, 0u) << what;
           EXPECT_LE(p.cell_candidates, p.candidates) << what;
           if (sc.across_levels) EXPECT_LT(p.cell_candidates, p.candidates) << what;
+          if (overlap) {
+            EXPECT_EQ(static_cast<long long>(p.candidates), candidates) << what;
+            EXPECT_EQ(static_cast<long long>(p.cell_candidates), cell_candidates) << what;
+          }
           candidates = static_cast<long long>(p.candidates);
+          cell_candidates = static_cast<long long>(p.cell_candidates);
         } else {
           EXPECT_FALSE(p.self_cell_pairs) << what;
           EXPECT_EQ(p.cell_candidates, 0u) << what;
@@ -1916,12 +1930,14 @@ TYPED_TEST(CudaQueryTyped, IntersectAllHashesTwoMeshesAsOneWithTheThreeQueriesPa
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   cuda::setProfiling(true);
-  auto check = [](const HashedMesh<S>& a, const HashedMesh<S>& b, bool joint,
-                  const std::string& what, Predicate pred = Predicate::Exact,
-                  std::size_t max_pairs = 0) {
+  cuda::QueryProfile all_profile;  // intersectAll's, in the last check
+  auto check = [&all_profile](const HashedMesh<S>& a, const HashedMesh<S>& b, bool joint,
+                              const std::string& what, Predicate pred = Predicate::Exact,
+                              std::size_t max_pairs = 0) {
     const QueryOptions o = on(Backend::Cuda, max_pairs, pred);
     const AllPairsResult all = intersectAll(a, b, o);
-    const bool ran_joint = cuda::lastQueryProfile().joint;
+    all_profile = cuda::lastQueryProfile();
+    const bool ran_joint = all_profile.joint;
     EXPECT_EQ(ran_joint, joint) << what;
     EXPECT_EQ(all.self_a.pairs, intersectSelf(a, o).pairs) << what << ": self a";
     EXPECT_EQ(all.self_b.pairs, intersectSelf(b, o).pairs) << what << ": self b";
@@ -1978,8 +1994,13 @@ TYPED_TEST(CudaQueryTyped, IntersectAllHashesTwoMeshesAsOneWithTheThreeQueriesPa
   }
   {
     kdet_test::ScopedEnv cells("KDET_FCL_CUDA_SELF_CELLS", "1");
-    check(f0, f1, true, "cells' pairs");
-    check(ball, copy, true, "sphere and its copy, cells' pairs");
+    for (const char* overlap : {"0", "1"}) {  // the cells' kernel after the scan, or beside it
+      kdet_test::ScopedEnv side("KDET_FCL_CUDA_SELF_OVERLAP", overlap);
+      const std::string how = std::string(", overlap ") + overlap;
+      check(f0, f1, true, "cells' pairs" + how);
+      EXPECT_EQ(all_profile.self_overlap, *overlap == '1' && all_profile.cell_rounds == 0) << how;
+      check(ball, copy, true, "sphere and its copy, cells' pairs" + how);
+    }
   }
   {
     kdet_test::ScopedEnv cells("KDET_FCL_CUDA_SELF_CELLS", "0");
@@ -2060,19 +2081,26 @@ TYPED_TEST(CudaQueryTyped, QueriesInRoundsFindTheSameCandidatesAndPairsInLessMem
   struct Mode {
     const char* cells;
     const char* scan;
+    const char* overlap = nullptr;  // KDET_FCL_CUDA_SELF_OVERLAP
   };
-  for (const Mode mode : {Mode{"1", nullptr}, Mode{"0", nullptr}, Mode{"0", "tile"}}) {
+  for (const Mode mode : {Mode{"1", nullptr, "0"}, Mode{"1", nullptr, "1"}, Mode{"0", nullptr},
+                          Mode{"0", "tile"}}) {
     kdet_test::ScopedEnv cells("KDET_FCL_CUDA_SELF_CELLS", mode.cells),
-        scan("KDET_FCL_CUDA_SCAN", mode.scan);
+        scan("KDET_FCL_CUDA_SCAN", mode.scan), side("KDET_FCL_CUDA_SELF_OVERLAP", mode.overlap);
     for (std::size_t q = 0; q < std::size(queries); ++q) {
       const std::string what = std::string(names[q]) + ", cells " + mode.cells + ", scan " +
-                               (mode.scan ? mode.scan : "warp");
+                               (mode.scan ? mode.scan : "warp") + ", overlap " +
+                               (mode.overlap ? mode.overlap : "-");
       Run one;
       {
         kdet_test::ScopedEnv limit("KDET_FCL_CUDA_ROUND_CANDIDATES", "0");
         one = queries[q]();
       }
       ASSERT_EQ(one.profile.rounds, 1) << what;
+      // (One round runs the cells' kernel beside the scan; the stages' rounds run them apart.)
+      EXPECT_EQ(one.profile.self_overlap,
+                cells_stage[q] && mode.overlap != nullptr && *mode.overlap == '1')
+          << what;
       ASSERT_GT(one.profile.candidates, 2 * work[q]) << what;  // so that k = 1, 2 need rounds
       for (const char* k : {"1", "2"}) {
         kdet_test::ScopedEnv limit("KDET_FCL_CUDA_ROUND_CANDIDATES", k);
