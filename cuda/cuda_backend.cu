@@ -1784,7 +1784,7 @@ struct Context {
   cudaStream_t stream = nullptr;
   // A second stream for work that runs beside the stream's own (selfOverlap): forkSide() makes it
   // wait for everything queued on `stream` so far, joinSide() makes `stream` wait for it.
-  cudaStream_t side = nullptr;
+  cudaStream_t side = nullptr;  // (of the greatest priority: its blocks go first)
   cudaEvent_t fork = nullptr, join = nullptr;
   cudaEvent_t ev[4] = {};
   // While profiling, three events per round of a query pass (markRound): before its phase 1
@@ -1827,7 +1827,9 @@ struct Context {
     if (ready) return;
     CUDA_TRY(cudaSetDevice(0));
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
-    CUDA_TRY(cudaStreamCreateWithFlags(&side, cudaStreamNonBlocking));
+    int least = 0, greatest = 0;
+    CUDA_TRY(cudaDeviceGetStreamPriorityRange(&least, &greatest));
+    CUDA_TRY(cudaStreamCreateWithPriority(&side, cudaStreamNonBlocking, greatest));
     for (cudaEvent_t& e : ev) CUDA_TRY(cudaEventCreate(&e));
     CUDA_TRY(cudaEventCreateWithFlags(&fork, cudaEventDisableTiming));
     CUDA_TRY(cudaEventCreateWithFlags(&join, cudaEventDisableTiming));
@@ -3238,30 +3240,38 @@ WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long t
   return {residentBlocks(kernel, all), ctx.warpTasks()};
 }
 
-/// Whether a self query takes its same-level pairs from the cells (selfCellPairsKernel) and scans
-/// only the coarser levels, or scans every level from each triangle's own. By default the cells
-/// are used for meshes of at least 48 x 32 entries per SM (203k on an H100): measured on an H100
-/// (benchmarks/RESULTS-gpu.md), phase 1 gained 3-16 % from the n-body (399k entries) and the cloth
-/// ball (268k) up, was level on the 90k cloth (240k) and lost 2-7 % on the funnel, the 20k and
-/// the 40k cloths (49k-111k), where the extra kernel and its tail cost more than the lookups it
-/// saves. KDET_FCL_CUDA_SELF_CELLS = 1 or 0 forces it on or off (read at every query, so tests and
-/// benchmarks can compare the two). Both give the same candidates.
-bool selfCellPairs(std::size_t entries) {
-  return detail::switchKnob("KDET_FCL_CUDA_SELF_CELLS",
-                entries >= 48 * 32 * static_cast<std::size_t>(g_num_sms));
-}
-
 /// Whether a self query that takes its same-level pairs from the cells runs the cells' kernel and
-/// the scan of the coarser levels at the same time: the cells' kernel on a second stream
-/// (Context::side), forked from the query's stream by an event and joined back before the plane
-/// filter, so that the scan's blocks take the SMs that the cells' last tasks leave idle, and the
-/// other way round (both kernels are grids of the resident blocks that take their tasks from a
-/// counter, so each alone ends in a tail). Only in a round that runs both (Round::stage 0; the
-/// stages' rounds run one kernel each). Measured on an H100 (benchmarks/RESULTS-gpu.md, six
-/// rounds alternating the knob): phase 1 of the cloth ball 0.226 -> 0.172 ms, of the n-body and
-/// the 200k-1M cloths 0.016-0.053 ms less. KDET_FCL_CUDA_SELF_OVERLAP=0 runs the cells' kernel
-/// first, then the scan, on the query's stream (default 1; read at every query).
+/// the scan of the coarser levels at the same time, so that neither kernel's tail leaves SMs idle
+/// (both are grids of the resident blocks that take their tasks from a counter, so each alone
+/// ends in a tail, and the second one's blocks take the SMs as the first one's leave). Only in a
+/// round that runs both (Round::stage 0; the stages' rounds run one kernel each). Which kernel
+/// takes the SMs first matters: measured on an H100 (benchmarks/RESULTS-gpu.md, "The cells'
+/// kernel beside the scan"), phase 1 of the cloth ball took 0.172 ms with the scan first and
+/// 0.212 ms with the cells' kernel first (0.225 ms one after the other), and a second stream of
+/// the same priority gave either, process by process. So the scan is queued first, on a second
+/// stream of the greatest priority (Context::side, forked from the query's stream by an event),
+/// then the cells' kernel on the query's stream, which waits for the side stream before the plane
+/// filter. Phase 1 of the n-body and the 200k-1M cloths: 0.016-0.053 ms less.
+/// KDET_FCL_CUDA_SELF_OVERLAP=0 runs the cells' kernel first, then the scan, on the query's
+/// stream (default 1; read at every query).
 bool selfOverlap() { return detail::switchKnob("KDET_FCL_CUDA_SELF_OVERLAP", true); }
+
+/// Whether a self query takes its same-level pairs from the cells (selfCellPairsKernel) and scans
+/// only the coarser levels, or scans every level from each triangle's own. With the two kernels
+/// at the same time (selfOverlap(), the default), the cells are used for every mesh: measured on
+/// an H100 (benchmarks/RESULTS-gpu.md, "The cells' kernel beside the scan"), the frames of the
+/// funnel and its two frames took 0.012-0.026 ms less with the cells, those of the 2k-40k cloths
+/// were level.
+/// One after the other (KDET_FCL_CUDA_SELF_OVERLAP=0), only for meshes of at least 48 x 32
+/// entries per SM (203k on an H100): measured so, phase 1 gained 3-16 % from the n-body (399k
+/// entries) and the cloth ball (268k) up, was level on the 90k cloth (240k) and lost 2-7 % on the
+/// funnel, the 20k and the 40k cloths (49k-111k), where the extra kernel and its tail cost more
+/// than the lookups it saves. KDET_FCL_CUDA_SELF_CELLS = 1 or 0 forces it on or off (read at
+/// every query, so tests and benchmarks can compare the two). Both give the same candidates.
+bool selfCellPairs(std::size_t entries) {
+  const std::size_t large = 48 * 32 * static_cast<std::size_t>(g_num_sms);
+  return detail::switchKnob("KDET_FCL_CUDA_SELF_CELLS", selfOverlap() || entries >= large);
+}
 
 /// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least as many as the
 /// warps an H100-class SM holds (64 per SM) and the cells are not crowded (the candidates per
@@ -3529,23 +3539,21 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     const HashView<S> mv = M.view();
     ctx.profile.cells_by_size = M.size_ordered;
     bindInfo<S>(s, M, nullptr);
-    // (Both kernels in this round: the cells' on the side stream, joined after the scan.)
-    const bool side = overlap && round.stage == 0;
-    if (side) ctx.profile.self_overlap = true;
-    if (cell_pairs && round.stage != 2) {
-      const cudaStream_t cs = side ? ctx.forkSide() : s;
+    // The pairs within a level, from the cells, on stream `on`.
+    auto cells = [&](cudaStream_t on) {
       const auto kernel = spans ? selfCellPairsKernel<S, true> : selfCellPairsKernel<S, false>;
       const std::uint32_t rows = cellRows(M.info.entries, M.self_density);
       ctx.profile.cell_rows = static_cast<int>(rows);
       const unsigned int blocks = residentBlocks(
           kernel, blocksFor(32 * ((std::size_t(M.entry_cap) + rows - 1) / rows), kQueryBlock));
-      kernel<<<blocks, kQueryBlock, 0, cs>>>(mv, M.block_cell.data(),
+      kernel<<<blocks, kQueryBlock, 0, on>>>(mv, M.block_cell.data(),
                                              M.pending ? M.pending_cell_cap : M.cell_cap, rows,
                                              warpVisit(), by_index, split, round, cand,
                                              ctx.cellTasks(), ctx.pair_count.data() + kCellCands);
       checkLaunch();
-    }
-    if (round.stage != 1) {  // (stage 1: only the cells' pairs in this round)
+    };
+    // The scan from each triangle's level (level_skip), on stream `on`.
+    auto scan = [&](cudaStream_t on) {
       if (warp) {
         const auto kernel =
             spans ? selfCandidatesWarpKernel<S, 8, true> : selfCandidatesWarpKernel<S, 8, false>;
@@ -3553,9 +3561,9 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
         ctx.profile.warp_lanes = 1 << log_p;
         const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
         const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
-        kernel<<<wl.blocks, kQueryBlock, 0, s>>>(mv, un, log_p, warpVisit(), level_skip,
-                                                 size_by_level, by_index, fixed_cells, split,
-                                                 round, cand, wl.tasks);
+        kernel<<<wl.blocks, kQueryBlock, 0, on>>>(mv, un, log_p, warpVisit(), level_skip,
+                                                  size_by_level, by_index, fixed_cells, split,
+                                                  round, cand, wl.tasks);
       } else {
         withTile([&](auto g, auto mb) {
           constexpr int G = decltype(g)::value;
@@ -3563,12 +3571,20 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
           const auto kernel =
               spans ? selfCandidatesKernel<S, G, MB, true> : selfCandidatesKernel<S, G, MB, false>;
           kernel<<<std::max(1u, blocksFor(G * roundTasks(n, round), kQueryBlock)), kQueryBlock,
-                   0, s>>>(mv, un, M.size_ordered, level_skip, by_index, split, round, cand);
+                   0, on>>>(mv, un, M.size_ordered, level_skip, by_index, split, round, cand);
         });
       }
+      checkLaunch();
+    };
+    if (overlap && round.stage == 0) {  // both in this round, at the same time (selfOverlap)
+      ctx.profile.self_overlap = true;
+      scan(ctx.forkSide());
+      cells(s);
+      ctx.joinSide();
+    } else {
+      if (cell_pairs && round.stage != 2) cells(s);
+      if (round.stage != 1) scan(s);  // (stage 1: only the cells' pairs in this round)
     }
-    checkLaunch();
-    if (side) ctx.joinSide();
     ctx.markRound(round.serial, 1);
     PairSink in = cand;
     if (filter) {

@@ -1154,7 +1154,8 @@ TEST(CudaQuery, WarpAndTileScansFindTheSameCandidatesAndPairs) {
         tasks("KDET_FCL_CUDA_WARP_TASKS", m.tasks), cells("KDET_FCL_CUDA_SELF_CELLS", m.cells),
         by_level("KDET_FCL_CUDA_SIZE_BY_LEVEL", m.by_level),
         fixed("KDET_FCL_CUDA_FIXED_CELLS", m.fixed);
-    const bool cell_pairs = m.cells != nullptr && *m.cells == '1';
+    // (By default a self query takes the cells' pairs, beside the scan: selfOverlap.)
+    const bool cell_pairs = m.cells == nullptr || *m.cells == '1';
     const bool size_by_level = m.by_level == nullptr || *m.by_level == '1';
     const bool fixed_cells = m.fixed == nullptr || *m.fixed == '1';
     const bool warp = m.scan == nullptr || std::string(m.scan) == "warp";
