@@ -1784,7 +1784,7 @@ struct Context {
   cudaStream_t stream = nullptr;
   // A second stream for work that runs beside the stream's own (selfOverlap): forkSide() makes it
   // wait for everything queued on `stream` so far, joinSide() makes `stream` wait for it.
-  cudaStream_t side = nullptr;  // (of the greatest priority: its blocks go first)
+  cudaStream_t side = nullptr;  // (of the least priority, `stream` of the greatest)
   cudaEvent_t fork = nullptr, join = nullptr;
   cudaEvent_t ev[4] = {};
   // While profiling, three events per round of a query pass (markRound): before its phase 1
@@ -1826,10 +1826,10 @@ struct Context {
   void init() {
     if (ready) return;
     CUDA_TRY(cudaSetDevice(0));
-    CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
     int least = 0, greatest = 0;
     CUDA_TRY(cudaDeviceGetStreamPriorityRange(&least, &greatest));
-    CUDA_TRY(cudaStreamCreateWithPriority(&side, cudaStreamNonBlocking, greatest));
+    CUDA_TRY(cudaStreamCreateWithPriority(&stream, cudaStreamNonBlocking, greatest));
+    CUDA_TRY(cudaStreamCreateWithPriority(&side, cudaStreamNonBlocking, least));
     for (cudaEvent_t& e : ev) CUDA_TRY(cudaEventCreate(&e));
     CUDA_TRY(cudaEventCreateWithFlags(&fork, cudaEventDisableTiming));
     CUDA_TRY(cudaEventCreateWithFlags(&join, cudaEventDisableTiming));
@@ -3248,10 +3248,12 @@ WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long t
 /// takes the SMs first matters: measured on an H100 (benchmarks/RESULTS-gpu.md, "The cells'
 /// kernel beside the scan"), phase 1 of the cloth ball took 0.172 ms with the scan first and
 /// 0.212 ms with the cells' kernel first (0.225 ms one after the other), and a second stream of
-/// the same priority gave either, process by process. So the scan is queued first, on a second
-/// stream of the greatest priority (Context::side, forked from the query's stream by an event),
-/// then the cells' kernel on the query's stream, which waits for the side stream before the plane
-/// filter. Phase 1 of the n-body and the 200k-1M cloths: 0.016-0.053 ms less.
+/// the same priority gave either, process by process; so did a scan on a second stream of a
+/// higher priority, queued first, in 2 processes of 12 (the second stream's wait for the fork
+/// is not instant). So the scan runs on the query's stream, of the greatest priority, and the
+/// cells' kernel on a second one of the least (Context::side), which waits for an event recorded
+/// on the query's stream just before the scan, and is waited for before the plane filter. Phase 1
+/// of the n-body and the 200k-1M cloths: 0.016-0.053 ms less.
 /// KDET_FCL_CUDA_SELF_OVERLAP=0 runs the cells' kernel first, then the scan, on the query's
 /// stream (default 1; read at every query).
 bool selfOverlap() { return detail::switchKnob("KDET_FCL_CUDA_SELF_OVERLAP", true); }
@@ -3578,8 +3580,9 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     };
     if (overlap && round.stage == 0) {  // both in this round, at the same time (selfOverlap)
       ctx.profile.self_overlap = true;
-      scan(ctx.forkSide());
-      cells(s);
+      const cudaStream_t side = ctx.forkSide();
+      scan(s);
+      cells(side);
       ctx.joinSide();
     } else {
       if (cell_pairs && round.stage != 2) cells(s);
