@@ -47,9 +47,10 @@
 // and KDET_FCL_CUDA_WARP_TASKS=0 gives each warp one task instead of a counter to take them from;
 // KDET_FCL_CUDA_SELF_CELLS=0|1 makes a self query scan every level from each triangle's own, or
 // take the pairs within a level from the cells and scan only the coarser levels (default: the
-// cells for meshes of about 200k cell entries and more; the cells' kernel then runs beside the
-// scan of the coarser levels, on a second stream, in a round that runs both:
-// KDET_FCL_CUDA_SELF_OVERLAP=0 runs it first), and KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
+// cells, in a kernel that runs beside the scan of the coarser levels, on a second stream, in a
+// round that runs both; KDET_FCL_CUDA_SELF_OVERLAP=0 runs the cells' kernel first, then the
+// scan, and takes the cells only for meshes of about 200k cell entries and more), and
+// KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
 // entries per warp task of those cells' pairs (default 8 or 32 by the density; all read at every
 // query, for tests and comparisons). KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes
 // the builds never or always record, per triangle, the levels above its own that hold a cell of
