@@ -3262,8 +3262,8 @@ bool selfOverlap() { return detail::switchKnob("KDET_FCL_CUDA_SELF_OVERLAP", tru
 /// only the coarser levels, or scans every level from each triangle's own. With the two kernels
 /// at the same time (selfOverlap(), the default), the cells are used for every mesh: measured on
 /// an H100 (benchmarks/RESULTS-gpu.md, "The cells' kernel beside the scan"), the frames of the
-/// funnel and its two frames took 0.012-0.026 ms less with the cells, those of the 2k-40k cloths
-/// were level.
+/// funnel and its two frames took 0.010-0.041 ms less with the cells, those of the 2k-40k cloths
+/// were level or less.
 /// One after the other (KDET_FCL_CUDA_SELF_OVERLAP=0), only for meshes of at least 48 x 32
 /// entries per SM (203k on an H100): measured so, phase 1 gained 3-16 % from the n-body (399k
 /// entries) and the cloth ball (268k) up, was level on the 90k cloth (240k) and lost 2-7 % on the
