@@ -3270,9 +3270,10 @@ bool selfOverlap() { return detail::switchKnob("KDET_FCL_CUDA_SELF_OVERLAP", tru
 /// funnel, the 20k and the 40k cloths (49k-111k), where the extra kernel and its tail cost more
 /// than the lookups it saves. KDET_FCL_CUDA_SELF_CELLS = 1 or 0 forces it on or off (read at
 /// every query, so tests and benchmarks can compare the two). Both give the same candidates.
-bool selfCellPairs(std::size_t entries) {
+/// `overlap`: the query's selfOverlap().
+bool selfCellPairs(std::size_t entries, bool overlap) {
   const std::size_t large = 48 * 32 * static_cast<std::size_t>(g_num_sms);
-  return detail::switchKnob("KDET_FCL_CUDA_SELF_CELLS", selfOverlap() || entries >= large);
+  return detail::switchKnob("KDET_FCL_CUDA_SELF_CELLS", overlap || entries >= large);
 }
 
 /// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least as many as the
@@ -3525,7 +3526,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   const bool spans = spansFor(M.self_density);
   const bool warp = warpScan();
   // (The entry count of the last build that read it back: an estimate after a re-hash.)
-  const bool cell_pairs = selfCellPairs(M.info.entries);
+  const bool beside = selfOverlap();
+  const bool cell_pairs = selfCellPairs(M.info.entries, beside);
   const int level_skip = cell_pairs ? 1 : 0;
   const bool size_by_level = warp && sizeByLevel();
   const bool fixed_cells = warp && fixedCellsKnob();
@@ -3536,7 +3538,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   ctx.profile.fixed_cells = fixedCells(fixed_cells, M.info);
   ctx.profile.index_adjacency = by_index;
   ctx.profile.self_cell_pairs = cell_pairs;
-  const bool overlap = cell_pairs && selfOverlap();
+  const bool overlap = cell_pairs && beside;
   auto launch = [&](PairSink cand, PairSink surv, PairSink out, Round round) {
     const HashView<S> mv = M.view();
     ctx.profile.cells_by_size = M.size_ordered;
@@ -3733,7 +3735,7 @@ void readEveryKnob() {
   (void)fixedCellsKnob();
   (void)stagedPairs();
   (void)indexAdjacency(0, 0);
-  (void)selfCellPairs(0);
+  (void)selfCellPairs(0, false);
   (void)selfOverlap();
   (void)cellRows(0, 0);
   (void)minBlocksKnob();

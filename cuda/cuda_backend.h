@@ -50,9 +50,8 @@
 // cells, in a kernel that runs beside the scan of the coarser levels, on a second stream, in a
 // round that runs both; KDET_FCL_CUDA_SELF_OVERLAP=0 runs the cells' kernel first, then the
 // scan, and takes the cells only for meshes of about 200k cell entries and more), and
-// KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the
-// entries per warp task of those cells' pairs (default 8 or 32 by the density; all read at every
-// query, for tests and comparisons). KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes
+// KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the entries per warp task of those cells' pairs
+// (default 8 or 32 by the density; all read at every query, for tests and comparisons). KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes
 // the builds never or always record, per triangle, the levels above its own that hold a cell of
 // its range, which self queries then skip without a lookup (upperLevels(); by default recorded
 // while the mesh's last self query found at most 4 candidates per triangle). The pairs are put
