@@ -2587,11 +2587,23 @@ bool countOrderAllowed() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER"
 bool countOrderForced() { return detail::switchKnob("KDET_FCL_CUDA_COUNT_ORDER", false); }
 
 /// Whether a query pass queues the counting order of its pairs (and, for a host result of at
-/// most one read-back chunk, their copy into the page-locked stage) before the host reads the
-/// pass's counts back, each step deciding on the device whether the pass allows it (OrderSizes),
-/// so that the host waits once per pass, not twice: KDET_FCL_CUDA_ONE_TRIP (default on; needs
-/// the counting order, KDET_FCL_CUDA_COUNT_ORDER not 0). Read at every query.
+/// most oneTripCopyChunks() read-back chunks, their copy into the page-locked stage) before the
+/// host reads the pass's counts back, each step deciding on the device whether the pass allows
+/// it (OrderSizes), so that the host waits once per pass, not twice: KDET_FCL_CUDA_ONE_TRIP
+/// (default on; needs the counting order, KDET_FCL_CUDA_COUNT_ORDER not 0). Read at every
+/// query.
 bool oneTripOn() { return detail::switchKnob("KDET_FCL_CUDA_ONE_TRIP", true); }
+
+/// The read-back chunks (KDET_FCL_CUDA_DOWNLOAD_CHUNK) of the largest host result that the one
+/// trip writes straight into the page-locked stage: KDET_FCL_CUDA_ONE_TRIP_COPY = k, 0 (never) to
+/// kOneTripMaxChunks (the default); larger ones are read back in chunks after the counts. H100,
+/// gpu_bench: from 1 chunk to 4, the cloth ball's output (61,530 pairs, 1.9 chunks) took 0.073
+/// against 0.099 ms, the two n-body frames' (70,169, 2.1 chunks) 0.095 against 0.140 ms
+/// (benchmarks/RESULTS-gpu.md). Read at every query.
+std::size_t oneTripCopyChunks() {
+  return static_cast<std::size_t>(
+      detail::numberKnob("KDET_FCL_CUDA_ONE_TRIP_COPY", 0, kOneTripMaxChunks, kOneTripMaxChunks));
+}
 
 /// The counting order in one cooperative launch (orderPairsKernel), or in its five launches (0):
 /// KDET_FCL_CUDA_FUSED_ORDER = k, 0 to 32 (default 2), the launch's blocks per SM in one trip,
@@ -2814,11 +2826,11 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     }
   };
   // One trip (oneTripOn): each pass queues the counting order behind its exact tests, and a
-  // host result of at most one read-back chunk (copy_most pairs) its copy into the stage, all
-  // sized on the device from the pass's counters (trip), before the counts come back. Not for a
-  // host result when the last one took more than kOneTripMaxChunks chunks: the host then
-  // enqueues a copy and an event per chunk (a few us each) after the counts, which the order's
-  // kernels cover when they are queued after the counts instead.
+  // host result of at most oneTripCopyChunks() read-back chunks (copy_most pairs) its copy into
+  // the stage, all sized on the device from the pass's counters (trip), before the counts come
+  // back. Not for a host result when the last one took more than kOneTripMaxChunks chunks: the
+  // host then enqueues a copy and an event per chunk (a few us each) after the counts, which the
+  // order's kernels cover when they are queued after the counts instead.
   const std::size_t chunk_pairs =
       std::min<std::size_t>(staging::downloadChunkElements(sizeof(TrianglePair)), 0x7FFFFFFF);
   const bool one_trip =
@@ -2826,7 +2838,8 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       (dev != nullptr || ctx.last_host_pairs <= kOneTripMaxChunks * chunk_pairs);
   std::uint32_t copy_most = 0;
   if (one_trip && dev == nullptr) {
-    copy_most = static_cast<std::uint32_t>(chunk_pairs);
+    copy_most = static_cast<std::uint32_t>(
+        std::min<std::size_t>(oneTripCopyChunks() * chunk_pairs, 0x7FFFFFFF));
     ctx.readback.reserve(std::size_t(copy_most) * sizeof(TrianglePair));
     if (ctx.readback.deviceData() == nullptr) copy_most = 0;  // kernels cannot write there
   }
@@ -3722,6 +3735,7 @@ void readEveryKnob() {
   (void)filterDecides();
   (void)countOrderAllowed();
   (void)oneTripOn();
+  (void)oneTripCopyChunks();
   (void)fusedOrderBlocks();
   (void)segmentMax();
   (void)roundCandidateLimit(1);

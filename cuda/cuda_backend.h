@@ -60,8 +60,9 @@
 // segment holds more than 1024 (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=n: n), else by the radix sort;
 // KDET_FCL_CUDA_COUNT_ORDER=0 always sorts, =1 counts whatever the number of pairs (read at every
 // query). The counting order is queued behind each pass's exact tests, sized on the device from
-// the pass's counters, and a host result of at most one read-back chunk is written by a kernel
-// into the page-locked stage in the same trip, so the host waits once per pass for the counts
+// the pass's counters, and a host result of at most kOneTripMaxChunks read-back chunks
+// (KDET_FCL_CUDA_ONE_TRIP_COPY=k: k, 0 to 4; read at every query) is written by a kernel into
+// the page-locked stage in the same trip, so the host waits once per pass for the counts
 // and the pairs (any pair count; the radix sort still runs, after the counts, where a segment
 // holds more than 1024; not for a host result after one of more than kOneTripMaxChunks
 // chunks; KDET_FCL_CUDA_ONE_TRIP=0: the counts first, then the order; read at every query). The
@@ -272,8 +273,9 @@ struct QueryProfile {
                           ///< after a segment of more than 1024 pairs, nor for a host result
                           ///< after one of more than kOneTripMaxChunks read-back chunks).
                           ///< False as pairs_counted
-  bool one_trip_copy = false;  ///< and a host result's pairs (at most one read-back chunk,
-                               ///< KDET_FCL_CUDA_DOWNLOAD_CHUNK) came in that same trip, written
+  bool one_trip_copy = false;  ///< and a host result's pairs (at most kOneTripMaxChunks
+                               ///< read-back chunks, KDET_FCL_CUDA_DOWNLOAD_CHUNK;
+                               ///< KDET_FCL_CUDA_ONE_TRIP_COPY) came in that same trip, written
                                ///< by a kernel into the page-locked stage
   unsigned int order_blocks = 0;  ///< the counting order ran as one cooperative launch of this
                                   ///< many blocks (KDET_FCL_CUDA_FUSED_ORDER); 0: in five

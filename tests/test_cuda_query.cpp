@@ -402,6 +402,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_ORDER", on_off, not_on_off},
       {"KDET_FCL_CUDA_ONE_TRIP", on_off, not_on_off},
+      {"KDET_FCL_CUDA_ONE_TRIP_COPY", {"0", "1", "4"}, {"5", "-1", "one"}},
       {"KDET_FCL_CUDA_FUSED_ORDER", {"0", "1", "2", "32"}, {"33", "-1", "two"}},
       {"KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", {"1", "256", "65536"}, {"0", "65537", "1k"}},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
@@ -1848,19 +1849,22 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
 }
 
 TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOnes) {
-  // With 4 KiB read-back chunks (512 pairs): a host result of at most one chunk comes in the
-  // same trip as the counts (one_trip_copy); a larger one is ordered in that trip and read back
-  // after it; after a host result of more than cuda::kOneTripMaxChunks chunks (2,048 pairs; the
-  // pairs delivered, after max_pairs), the next host query orders its pairs after the counts
-  // (one_trip false: counted or sorted as the floor says), and the one after a small result
-  // takes one trip again. Queries into a device buffer always take one trip and do not move the
-  // rule. Fans give exact pair counts: 300, 1,000 and 4,800 (80 fans of 60).
+  // With 4 KiB read-back chunks (512 pairs) and KDET_FCL_CUDA_ONE_TRIP_COPY=1: a host result of
+  // at most one chunk comes in the same trip as the counts (one_trip_copy); a larger one is
+  // ordered in that trip and read back after it; after a host result of more than
+  // cuda::kOneTripMaxChunks chunks (2,048 pairs; the pairs delivered, after max_pairs), the next
+  // host query orders its pairs after the counts (one_trip false: counted or sorted as the floor
+  // says), and the one after a small result takes one trip again. Queries into a device buffer
+  // always take one trip and do not move the rule. Then KDET_FCL_CUDA_ONE_TRIP_COPY = 2, 4, 0
+  // and unset (4: kOneTripMaxChunks): results of up to that many chunks come in the trip. Fans
+  // give exact pair counts: 300, 1,000 and 4,800 (80 fans of 60).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
   kdet_test::ScopedEnv trip_on("KDET_FCL_CUDA_ONE_TRIP", nullptr);  // (the default: on)
   kdet_test::ScopedEnv chunk("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
+  std::optional<kdet_test::ScopedEnv> copy_one(std::in_place, "KDET_FCL_CUDA_ONE_TRIP_COPY", "1");
   ASSERT_EQ(cuda::kOneTripMaxChunks * 512, 2048u);
   cuda::setProfiling(true);
   const HashedMesh<S> small(makeFans<S>(1, 300)), mid(makeFans<S>(1, 1000)),
@@ -1911,6 +1915,30 @@ TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOne
     step("300 pairs, one trip off", small, 0, want_small, false, false, false);
     step("4,800 pairs, one trip off", large, 0, want_large, false, false, true);
   }
+  // KDET_FCL_CUDA_ONE_TRIP_COPY = k: results of up to k chunks come in the trip (0: none).
+  copy_one.reset();
+  (void)intersectSelf(small, on(Backend::Cuda));  // the last host result small again
+  {
+    kdet_test::ScopedEnv copy("KDET_FCL_CUDA_ONE_TRIP_COPY", "2");
+    step("1,000 pairs, two chunks copied", mid, 0, want_mid, true, true, true);
+    step("4,800 pairs, two chunks copied", large, 0, want_large, true, false, true);
+  }
+  (void)intersectSelf(small, on(Backend::Cuda));
+  {
+    kdet_test::ScopedEnv copy("KDET_FCL_CUDA_ONE_TRIP_COPY", "4");
+    step("300 pairs, four chunks copied", small, 0, want_small, true, true, true);
+    step("1,000 pairs, four chunks copied", mid, 0, want_mid, true, true, true);
+    step("4,800 pairs after 1,000, four chunks copied", large, 0, want_large, true, false, true);
+  }
+  {
+    kdet_test::ScopedEnv copy("KDET_FCL_CUDA_ONE_TRIP_COPY", "0");
+    step("300 pairs, none copied", small, 0, want_small, false, false, false);  // (after 4,800)
+    step("300 pairs after 300, none copied", small, 0, want_small, true, false, true);
+  }
+  // Unset: up to kOneTripMaxChunks chunks.
+  kdet_test::ScopedEnv copy_default("KDET_FCL_CUDA_ONE_TRIP_COPY", nullptr);
+  step("1,000 pairs by default", mid, 0, want_mid, true, true, true);
+  step("4,800 pairs after 1,000 by default", large, 0, want_large, true, false, true);
   cuda::setProfiling(false);
 #endif
 }
