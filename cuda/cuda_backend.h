@@ -51,10 +51,11 @@
 // round that runs both; KDET_FCL_CUDA_SELF_OVERLAP=0 runs the cells' kernel first, then the
 // scan, and takes the cells only for meshes of about 200k cell entries and more), and
 // KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the entries per warp task of those cells' pairs
-// (default 8 or 32 by the density; all read at every query, for tests and comparisons). KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes
-// the builds never or always record, per triangle, the levels above its own that hold a cell of
-// its range, which self queries then skip without a lookup (upperLevels(); by default recorded
-// while the mesh's last self query found at most 4 candidates per triangle). The pairs are put
+// (default 8 or 32 by the density; all read at every query, for tests and comparisons).
+// KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes the builds never or always record,
+// per triangle, the levels above its own that hold a cell of its range, which self queries then
+// skip without a lookup (upperLevels(); by default recorded while the mesh's last self query
+// found at most 4 candidates per triangle). The pairs are put
 // in (a, b) order by counting them per segment of first indices as the exact tests emit them (a
 // scan, a scatter, a rank within each segment) when there are at least kCountOrderMinPairs and no
 // segment holds more than 1024 (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=n: n), else by the radix sort;
