@@ -1361,6 +1361,93 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
   }
 }
 
+/// The deciding plane filter (planeFilterKernel<S, MB, true>: the same pairs to `out` and `surv`)
+/// with its last step in full warps. A lane's first steps (detail::planeFilterSigns: the two
+/// planes' signs) decide most pairs; the rest, about one in five on the cloth ball, take
+/// detail::transversalFilterVerdict's two orientations. In the one-thread-per-pair kernel those
+/// run with a few lanes of each warp busy (ncu, cloth ball: 7 of 32 on average there). Here each
+/// warp queues those pairs in shared memory, with their six signs (non-zero: one bit each), and
+/// finishes them 32 at a time, reloading their vertices (cached), and the few left at its end.
+/// Warp-uniform loop: every lane of a warp takes the pairs base + lane of the same bases. The
+/// grid is the resident blocks (launchPlaneFilter), so that a warp takes many pairs.
+template <class S, int MB>
+__global__ void __launch_bounds__(kFilterBlock, MB)
+    planeFilterQueuedKernel(const unsigned long long* __restrict__ cand,
+                            const unsigned long long* count, unsigned long long capacity,
+                            const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
+                            const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
+                            PairSink surv, PairSink out, bool self, std::uint32_t split,
+                            int cat_shift) {
+  constexpr unsigned int kFull = 0xFFFFFFFFu;
+  __shared__ unsigned long long queue_keys[kFilterBlock / 32][64];
+  __shared__ unsigned char queue_signs[kFilterBlock / 32][64];
+  unsigned long long* const qk = queue_keys[threadIdx.x >> 5];
+  unsigned char* const qs = queue_signs[threadIdx.x >> 5];
+  const unsigned int lane = threadIdx.x & 31u;
+  const unsigned long long m = *count < capacity ? *count : capacity;
+  // The last step of pair c whose signs are `bits` (bit k: sp[k] > 0, bit 3 + k: sq[k] > 0).
+  const auto finish = [&](unsigned long long c, unsigned int bits) {
+    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+    const std::uint32_t* const p = ta + 3 * std::size_t(i);
+    const std::uint32_t* const q = tb + 3 * std::size_t(j);
+    int sp[3], sq[3];
+    for (int k = 0; k < 3; ++k) {
+      sp[k] = (bits >> k) & 1u ? 1 : -1;
+      sq[k] = (bits >> (3 + k)) & 1u ? 1 : -1;
+    }
+    const detail::FilterVerdict v = detail::transversalFilterVerdict(
+        sp, sq, va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]]);
+    if (v == detail::FilterVerdict::Intersect) {
+      if (self) emitSelfPair(out, split, cat_shift, i, j);
+      else emitPair(out, i, j);
+    } else if (v == detail::FilterVerdict::Undecided) {
+      emitPair(surv, i, j);
+    }
+  };
+  unsigned int fill = 0;  // the warp's queued pairs (warp-uniform, below 32 between steps)
+  const unsigned long long stride = static_cast<unsigned long long>(gridDim.x) * blockDim.x;
+  for (unsigned long long base = static_cast<unsigned long long>(blockIdx.x) * blockDim.x +
+                                 (threadIdx.x & ~31u);
+       base < m; base += stride) {
+    const unsigned long long k = base + lane;
+    bool queue = false;
+    unsigned int bits = 0;
+    unsigned long long c = 0;
+    if (k < m) {
+      c = cand[k];
+      const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+      const std::uint32_t* const p = ta + 3 * std::size_t(i);
+      const std::uint32_t* const q = tb + 3 * std::size_t(j);
+      int sp[3], sq[3];
+      detail::FilterVerdict v;
+      if (detail::planeFilterSigns(va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]], sp,
+                                   sq, v)) {
+        queue = true;
+        for (int e = 0; e < 3; ++e)
+          bits |= (sp[e] > 0 ? 1u : 0u) << e | (sq[e] > 0 ? 1u : 0u) << (3 + e);
+      } else if (v == detail::FilterVerdict::Undecided) {
+        emitPair(surv, i, j);
+      }
+    }
+    const unsigned int mask = __ballot_sync(kFull, queue);
+    if (queue) {
+      const unsigned int at = fill + __popc(mask & ((1u << lane) - 1u));
+      qk[at] = c;
+      qs[at] = static_cast<unsigned char>(bits);
+    }
+    fill += __popc(mask);
+    __syncwarp();
+    if (fill >= 32) {  // the last 32 queued, one per lane
+      fill -= 32;
+      const unsigned long long qc = qk[fill + lane];
+      const unsigned int qb = qs[fill + lane];
+      __syncwarp();  // read before the next pushes overwrite them
+      finish(qc, qb);
+    }
+  }
+  if (lane < fill) finish(qk[lane], qs[lane]);
+}
+
 /// Adds `by` to n vertex indices: the second mesh's triangles of two meshes hashed as one.
 __global__ void shiftIndicesKernel(std::uint32_t n, std::uint32_t by, std::uint32_t* t) {
   const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
@@ -3226,17 +3313,17 @@ struct WarpScanLaunch {
   unsigned long long* tasks;
 };
 
-/// At most `all` blocks of kQueryBlock threads: no more than the device holds at once, as the
-/// occupancy calculator gives for `kernel` (cached per kernel; the context's mutex serialises the
-/// callers).
+/// At most `all` blocks of `block` threads (kQueryBlock unless given; one size per kernel): no more
+/// than the device holds at once, as the occupancy calculator gives for `kernel` (cached per
+/// kernel; the context's mutex serialises the callers).
 template <class Kernel>
-unsigned int residentBlocks(Kernel* kernel, unsigned int all) {
+unsigned int residentBlocks(Kernel* kernel, unsigned int all, int block = kQueryBlock) {
   static std::map<const void*, int> per_sm;
   const void* key = reinterpret_cast<const void*>(kernel);
   auto it = per_sm.find(key);
   if (it == per_sm.end()) {
     int b = 0;
-    CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, kQueryBlock, 0));
+    CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, block, 0));
     it = per_sm.emplace(key, std::max(b, 1)).first;
   }
   return static_cast<unsigned int>(std::min<unsigned long long>(
@@ -3373,6 +3460,11 @@ int filterMinBlocks() {
 /// Read at every query.
 bool filterDecides() { return detail::switchKnob("KDET_FCL_CUDA_FILTER_DECIDES", true); }
 
+/// KDET_FCL_CUDA_FILTER_QUEUE=0: the deciding filter finishes each pair in its own thread
+/// (planeFilterKernel) instead of in full warps (default 1: planeFilterQueuedKernel). Read at
+/// every query.
+bool filterQueue() { return detail::switchKnob("KDET_FCL_CUDA_FILTER_QUEUE", true); }
+
 /// Launches the plane filter (grid-stride over the device-side candidate count: 8 blocks of 256
 /// threads per SM); a self query's pairs (self) go to `out` as selfExactKernel emits them.
 template <class S>
@@ -3388,7 +3480,14 @@ void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
   const bool capped = filterMinBlocks() != 1;
   // The deciding filter, uncapped, took 107 registers (float); at 3 blocks per SM, 80 and no
   // spills (ptxas -v, sm_90): the dropping-only filter's occupancy.
-  if (decides) run(capped ? planeFilterKernel<S, 6, true> : planeFilterKernel<S, 3, true>);
+  if (decides && filterQueue()) {
+    // The resident blocks only (80 registers: 3 per SM), so that each warp takes many pairs and
+    // finishes its queued ones 32 at a time (8 per SM, a warp's queue rarely filled: 43.6 µs
+    // against 36.5 on the cloth ball, call 3 of results/gpu-h100-session31).
+    const auto kernel = capped ? planeFilterQueuedKernel<S, 6> : planeFilterQueuedKernel<S, 3>;
+    kernel<<<residentBlocks(kernel, blocks, kFilterBlock), kFilterBlock, 0, s>>>(
+        cand.pairs, cand.count, cand.capacity, va, ta, vb, tb, surv, out, self, split, cat_shift);
+  } else if (decides) run(capped ? planeFilterKernel<S, 6, true> : planeFilterKernel<S, 3, true>);
   else run(capped ? planeFilterKernel<S, 6, false> : planeFilterKernel<S, 1, false>);
   checkLaunch();
 }
@@ -3733,6 +3832,7 @@ void readEveryKnob() {
   (void)capacityKnob();
   (void)planeFilterOn();
   (void)filterDecides();
+  (void)filterQueue();
   (void)countOrderAllowed();
   (void)oneTripOn();
   (void)oneTripCopyChunks();

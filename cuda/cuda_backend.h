@@ -33,8 +33,11 @@
 // KDET_FCL_CUDA_PLANE_FILTER=0 turns off the plane filter between the candidate search and the
 // exact tests (default on, Predicate::Exact only; read at every query),
 // KDET_FCL_CUDA_FILTER_DECIDES=0 makes that filter only drop pairs (default: it also finishes
-// the pairs its floating-point filters decide, and only the others take the exact kernel) and
-// KDET_FCL_CUDA_FILTER_MINBLOCKS=6 caps the filter kernel at 40 registers (default uncapped);
+// the pairs its floating-point filters decide, and only the others take the exact kernel),
+// KDET_FCL_CUDA_FILTER_QUEUE=0 makes the deciding filter finish each pair in its own thread
+// (default: the pairs that need its last two orientations are queued per warp and finished 32
+// at a time) and KDET_FCL_CUDA_FILTER_MINBLOCKS=6 caps the filter kernel at 40 registers
+// (default uncapped);
 // these are read at every query; KDET_FCL_CUDA_SYNC_REHASH=1 makes every re-hash read its
 // sizes back (the round-3 flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell
 // keys everywhere and KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces

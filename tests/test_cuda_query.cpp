@@ -407,6 +407,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", {"1", "256", "65536"}, {"0", "65537", "1k"}},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_FILTER_DECIDES", on_off, not_on_off},
+      {"KDET_FCL_CUDA_FILTER_QUEUE", on_off, not_on_off},
       {"KDET_FCL_CUDA_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_WARP_TASKS", on_off, not_on_off},
       {"KDET_FCL_CUDA_SIZE_BY_LEVEL", on_off, not_on_off},
@@ -874,9 +875,10 @@ TYPED_TEST(CudaQueryTyped, NearCoplanarAndTouchingPairsSurviveThePlaneFilter) {
 
 TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   // The filter can be switched off per query (KDET_FCL_CUDA_PLANE_FILTER=0), or made to only drop
-  // pairs (KDET_FCL_CUDA_FILTER_DECIDES=0); every way, and with tiny buffers (every buffer
+  // pairs (KDET_FCL_CUDA_FILTER_DECIDES=0), and the deciding filter finishes its last step in
+  // full warps or not (KDET_FCL_CUDA_FILTER_QUEUE); every way, and with tiny buffers (every buffer
   // overflows, the survivors' too), the pairs are the CPU's. Deciding, the filter leaves fewer
-  // pairs to the exact kernel than dropping alone.
+  // pairs to the exact kernel than dropping alone, and as many with its queue as without.
   KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(80, 4.0, 1.0, 0.03, 1.0));
   HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 48, 24));
@@ -888,16 +890,19 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
   struct Mode {
     const char* filter;
     const char* decides;
+    const char* queue;
   };
   [[maybe_unused]] std::size_t dropping[3] = {0, 0, 0};  // filter 1, decides 0 (run first)
-  for (const Mode mode : {Mode{"0", "1"}, Mode{"1", "0"}, Mode{"1", "1"}}) {
+  [[maybe_unused]] std::size_t unqueued[3] = {0, 0, 0};  // decides 1, queue 0 (run before 1)
+  for (const Mode mode : {Mode{"0", "1", "1"}, Mode{"1", "0", "1"}, Mode{"1", "1", "0"},
+                          Mode{"1", "1", "1"}}) {
     [[maybe_unused]] std::size_t exact[3] = {0, 0, 0};  // uncapped: inter, self, sheets
     for (const char* cap : {"", "2", "50"}) {
       kdet_test::ScopedEnv f("KDET_FCL_CUDA_PLANE_FILTER", mode.filter),
           d("KDET_FCL_CUDA_FILTER_DECIDES", mode.decides),
-          c("KDET_FCL_CUDA_PAIR_CAPACITY", cap);
+          q("KDET_FCL_CUDA_FILTER_QUEUE", mode.queue), c("KDET_FCL_CUDA_PAIR_CAPACITY", cap);
       const std::string what = std::string("filter ") + mode.filter + " decides " +
-                               mode.decides + " cap '" + cap + "'";
+                               mode.decides + " queue " + mode.queue + " cap '" + cap + "'";
 #if KDET_FCL_TEST_HAVE_CUDA
       cuda::setProfiling(true);
 #endif
@@ -926,6 +931,9 @@ TEST(CudaQuery, PlaneFilterOnOffAndOverflowGiveTheSamePairs) {
       EXPECT_LT(exact[0], dropping[0] / 2) << "inter";
       EXPECT_LE(exact[1], dropping[1]) << "self";
       EXPECT_LE(exact[2], dropping[2]) << "sheets";
+      // The queue only changes which lanes finish a pair: the same pairs are left undecided.
+      if (*mode.queue == '0') std::copy(exact, exact + 3, unqueued);
+      else EXPECT_TRUE(std::equal(exact, exact + 3, unqueued)) << "queued against not";
     }
 #endif
   }

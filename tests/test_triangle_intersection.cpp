@@ -523,6 +523,30 @@ TEST(TriangleIntersection, RandomDegenerateMatchesMinkowskiReferee) {
   EXPECT_LT(hits, cases - cases / 10);
 }
 
+/// The filter verdict's vertices (tri_isect::transversalVertices, closed form) are the general
+/// transversalOrder's, for every pattern of six non-zero signs where neither triangle lies
+/// strictly on one side of the other's plane (6 mixed patterns per triangle): the vertices are
+/// labelled by their indices, so each picked label must be transversalOrder's index.
+TEST(TriangleIntersection, TransversalVerticesOfNonZeroSignsAreTransversalOrders) {
+  namespace ti = kdet_fcl::detail::tri_isect;
+  int patterns = 0;
+  for (int m = 0; m < 64; ++m) {
+    int sp[3], sq[3];
+    for (int i = 0; i < 3; ++i) {
+      sp[i] = ((m >> i) & 1) != 0 ? 1 : -1;
+      sq[i] = ((m >> (3 + i)) & 1) != 0 ? 1 : -1;
+    }
+    if (ti::strictlyOneSide(sp) || ti::strictlyOneSide(sq)) continue;
+    int x[6];
+    ti::transversalOrder(sp, sq, x);
+    int v[6];
+    ti::transversalVertices(sp, sq, 0, 1, 2, 0, 1, 2, v[0], v[1], v[2], v[3], v[4], v[5]);
+    for (int k = 0; k < 6; ++k) EXPECT_EQ(v[k], x[k]) << "signs " << m << ", vertex " << k;
+    ++patterns;
+  }
+  EXPECT_EQ(patterns, 36);
+}
+
 /// The filters decide generic pairs: random triangles in general position (crossing and
 /// disjoint, in float and double), each decided verdict checked against the exact test and the
 /// SAT referee. Pairs that share a vertex are never decided (the GPU's exact kernel then drops

@@ -376,6 +376,45 @@ KDET_HD_INLINE void transversalOrder(const int sp[3], const int sq[3], int x[6])
   x[5] = q[(fq + 2) % 3];
 }
 
+/// The lone vertex of a triangle whose three orientation signs against the other's plane are all
+/// non-zero and not all equal (loneVertex's `first` for such signs, in closed form): the one whose
+/// sign differs from the other two's.
+KDET_HD_INLINE int loneOfNonZero(const int s[3]) {
+  return s[0] == s[1] ? 2 : (s[0] == s[2] ? 1 : 0);
+}
+
+/// Whether loneVertex negates such signs (all non-zero, not all equal): where the lone vertex is
+/// negative, i.e. the other two, the majority, are positive; their sum has the majority's sign.
+KDET_HD_INLINE bool negateOfNonZero(const int s[3]) { return s[0] + s[1] + s[2] > 0; }
+
+/// The triangle (t0, t1, t2) from vertex `first` on: a = t_first, and (b, c) = (t_first+1,
+/// t_first+2) (indices mod 3), swapped when `reverse`. By selection on named values, with no array
+/// indexed: on the device the general transversalOrder's indexed arrays became long chains of
+/// predicated moves (benchmarks/RESULTS-gpu.md, the plane filter's SASS).
+template <class T>
+KDET_HD_INLINE void fromVertex(const T& t0, const T& t1, const T& t2, int first, bool reverse,
+                               T& a, T& b, T& c) {
+  const bool f0 = first == 0, f1 = first == 1;
+  a = f0 ? t0 : (f1 ? t1 : t2);
+  const T n1 = f0 ? t1 : (f1 ? t2 : t0);
+  const T n2 = f0 ? t2 : (f1 ? t0 : t1);
+  b = reverse ? n2 : n1;
+  c = reverse ? n1 : n2;
+}
+
+/// transversalOrder for six non-zero signs (neither triangle strictly on one side): the same
+/// vertices a, b, c of P = (p0, p1, p2) and d, e, f of Q = (q0, q1, q2), picked by fromVertex.
+/// With all signs non-zero, P's lone vertex comes first and is reversed when Q's signs are negated;
+/// Q's order reversed when P's signs are negated (transversalOrder's q) leaves its lone vertex in
+/// front and swaps the two after it.
+template <class T>
+KDET_HD_INLINE void transversalVertices(const int sp[3], const int sq[3], const T& p0,
+                                        const T& p1, const T& p2, const T& q0, const T& q1,
+                                        const T& q2, T& a, T& b, T& c, T& d, T& e, T& f) {
+  fromVertex(p0, p1, p2, loneOfNonZero(sp), negateOfNonZero(sq), a, b, c);
+  fromVertex(q0, q1, q2, loneOfNonZero(sq), negateOfNonZero(sp), d, e, f);
+}
+
 /// T[k] (k in 0..2) by selection rather than by indexing, so that on the device the array can
 /// stay in registers.
 template <class T>
@@ -468,6 +507,53 @@ struct PlainKernel {
 /// What the orientation filters alone tell about trianglesIntersect() (the exact test).
 enum class FilterVerdict { Disjoint, Intersect, Undecided };
 
+/// trianglesFilterVerdict's first steps: the filter's signs of each triangle's vertices against
+/// the other's plane. Returns true, with sp and sq set, where the verdict is left to
+/// transversalFilterVerdict (all six signs proven non-zero, neither triangle strictly on one
+/// side); else false, with `verdict` Disjoint (one triangle provably strictly on one side) or
+/// Undecided (a sign not proven). The GPU's plane filter runs the last step for the pairs
+/// that need it together, in full warps (cuda_backend.cu).
+template <class S>
+KDET_HD_INLINE bool planeFilterSigns(const Vec3<S>& p0, const Vec3<S>& p1, const Vec3<S>& p2,
+                                     const Vec3<S>& q0, const Vec3<S>& q1, const Vec3<S>& q2,
+                                     int sp[3], int sq[3], FilterVerdict& verdict) {
+  // The coordinates stay in S (converted exactly where used: fewer registers for float), and in
+  // named values, never in an indexed array.
+  verdict = FilterVerdict::Disjoint;
+  const OrientPlane qp = orientPlane(toDouble(q0), toDouble(q1), toDouble(q2));
+  sp[0] = orient3dFilterSign(qp, toDouble(p0));
+  sp[1] = orient3dFilterSign(qp, toDouble(p1));
+  sp[2] = orient3dFilterSign(qp, toDouble(p2));
+  if (tri_isect::strictlyOneSide(sp)) return false;
+  const OrientPlane pp = orientPlane(toDouble(p0), toDouble(p1), toDouble(p2));
+  sq[0] = orient3dFilterSign(pp, toDouble(q0));
+  sq[1] = orient3dFilterSign(pp, toDouble(q1));
+  sq[2] = orient3dFilterSign(pp, toDouble(q2));
+  if (tri_isect::strictlyOneSide(sq)) return false;
+  verdict = FilterVerdict::Undecided;
+  for (int i = 0; i < 3; ++i)
+    if (sp[i] == 0 || sq[i] == 0) return false;
+  return true;
+}
+
+/// trianglesFilterVerdict's last step, for the signs planeFilterSigns left to it (all six
+/// non-zero): transversalProper's two orientations on transversalOrder's vertices, where both are
+/// proven.
+template <class S>
+KDET_HD_INLINE FilterVerdict transversalFilterVerdict(const int sp[3], const int sq[3],
+                                                      const Vec3<S>& p0, const Vec3<S>& p1,
+                                                      const Vec3<S>& p2, const Vec3<S>& q0,
+                                                      const Vec3<S>& q1, const Vec3<S>& q2) {
+  Vec3<S> a, b, c, d, e, f;
+  tri_isect::transversalVertices(sp, sq, p0, p1, p2, q0, q1, q2, a, b, c, d, e, f);
+  const int o1 = orient3dFilterSign(toDouble(b), toDouble(d), toDouble(a), toDouble(e));
+  if (o1 == 0) return FilterVerdict::Undecided;
+  if (o1 > 0) return FilterVerdict::Disjoint;
+  const int o2 = orient3dFilterSign(toDouble(a), toDouble(d), toDouble(c), toDouble(f));
+  if (o2 == 0) return FilterVerdict::Undecided;
+  return o2 > 0 ? FilterVerdict::Disjoint : FilterVerdict::Intersect;
+}
+
 /// The exact test's answer where its floating-point filters decide it, without any exact
 /// (expansion) arithmetic: Disjoint when either triangle lies provably strictly on one side of
 /// the other's plane; for two triangles whose six vertex signs are all proven non-zero (proper
@@ -481,26 +567,10 @@ template <class S>
 KDET_HD_INLINE FilterVerdict trianglesFilterVerdict(const Vec3<S>& p0, const Vec3<S>& p1,
                                                     const Vec3<S>& p2, const Vec3<S>& q0,
                                                     const Vec3<S>& q1, const Vec3<S>& q2) {
-  // The coordinates stay in S (converted exactly where used: fewer registers for float).
-  const Vec3<S> P[3] = {p0, p1, p2}, Q[3] = {q0, q1, q2};
   int sp[3], sq[3];
-  const OrientPlane qp = orientPlane(toDouble(q0), toDouble(q1), toDouble(q2));
-  for (int i = 0; i < 3; ++i) sp[i] = orient3dFilterSign(qp, toDouble(P[i]));
-  if (tri_isect::strictlyOneSide(sp)) return FilterVerdict::Disjoint;
-  const OrientPlane pp = orientPlane(toDouble(p0), toDouble(p1), toDouble(p2));
-  for (int i = 0; i < 3; ++i) sq[i] = orient3dFilterSign(pp, toDouble(Q[i]));
-  if (tri_isect::strictlyOneSide(sq)) return FilterVerdict::Disjoint;
-  for (int i = 0; i < 3; ++i)
-    if (sp[i] == 0 || sq[i] == 0) return FilterVerdict::Undecided;
-  int x[6];
-  tri_isect::transversalOrder(sp, sq, x);
-  const Vec3<double> a = tri_isect::pick(P, x[0]), d = tri_isect::pick(Q, x[3]);
-  const int o1 = orient3dFilterSign(tri_isect::pick(P, x[1]), d, a, tri_isect::pick(Q, x[4]));
-  if (o1 == 0) return FilterVerdict::Undecided;
-  if (o1 > 0) return FilterVerdict::Disjoint;
-  const int o2 = orient3dFilterSign(a, d, tri_isect::pick(P, x[2]), tri_isect::pick(Q, x[5]));
-  if (o2 == 0) return FilterVerdict::Undecided;
-  return o2 > 0 ? FilterVerdict::Disjoint : FilterVerdict::Intersect;
+  FilterVerdict verdict;
+  if (!planeFilterSigns(p0, p1, p2, q0, q1, q2, sp, sq, verdict)) return verdict;
+  return transversalFilterVerdict(sp, sq, p0, p1, p2, q0, q1, q2);
 }
 
 /// trianglesIntersect() with the orientation signs of kernel K (ExactKernel, PlainKernel<T>).
