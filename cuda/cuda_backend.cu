@@ -1316,6 +1316,21 @@ __device__ __forceinline__ bool strictlyOneSide(const Vec3<S>* __restrict__ qv,
   return detail::orient3dFilterSign(plane, detail::toDouble(pv[pt[2]])) == s;
 }
 
+/// The deciding filter's verdict v on candidate (i, j): a colliding pair to `out` as the exact
+/// kernel would emit it (self: emitSelfPair), an undecided one to `surv` for the exact kernel,
+/// nothing for a disjoint one.
+__device__ __forceinline__ void emitVerdict(detail::FilterVerdict v, std::uint32_t i,
+                                            std::uint32_t j, const PairSink& surv,
+                                            const PairSink& out, bool self, std::uint32_t split,
+                                            int cat_shift) {
+  if (v == detail::FilterVerdict::Intersect) {
+    if (self) emitSelfPair(out, split, cat_shift, i, j);
+    else emitPair(out, i, j);
+  } else if (v == detail::FilterVerdict::Undecided) {
+    emitPair(surv, i, j);
+  }
+}
+
 /// Between phases 1 and 2 (Predicate::Exact only): one thread per candidate drops the pair when
 /// either triangle lies, provably, strictly on one side of the other's plane; the survivors are
 /// appended to `surv` (the same (i << 32) | j keys) for the exact kernel. Every dropped pair is one
@@ -1344,14 +1359,9 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
     if constexpr (kDecide) {
       const std::uint32_t* const p = ta + 3 * std::size_t(i);
       const std::uint32_t* const q = tb + 3 * std::size_t(j);
-      const detail::FilterVerdict v = detail::trianglesFilterVerdict(
-          va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]]);
-      if (v == detail::FilterVerdict::Intersect) {
-        if (self) emitSelfPair(out, split, cat_shift, i, j);
-        else emitPair(out, i, j);
-      } else if (v == detail::FilterVerdict::Undecided) {
-        emitPair(surv, i, j);
-      }
+      emitVerdict(detail::trianglesFilterVerdict(va[p[0]], va[p[1]], va[p[2]], vb[q[0]],
+                                                 vb[q[1]], vb[q[2]]),
+                  i, j, surv, out, self, split, cat_shift);
     } else {
       const bool drop =
           strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
@@ -1395,14 +1405,9 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
       sp[k] = (bits >> k) & 1u ? 1 : -1;
       sq[k] = (bits >> (3 + k)) & 1u ? 1 : -1;
     }
-    const detail::FilterVerdict v = detail::transversalFilterVerdict(
-        sp, sq, va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]]);
-    if (v == detail::FilterVerdict::Intersect) {
-      if (self) emitSelfPair(out, split, cat_shift, i, j);
-      else emitPair(out, i, j);
-    } else if (v == detail::FilterVerdict::Undecided) {
-      emitPair(surv, i, j);
-    }
+    emitVerdict(detail::transversalFilterVerdict(sp, sq, va[p[0]], va[p[1]], va[p[2]], vb[q[0]],
+                                                 vb[q[1]], vb[q[2]]),
+                i, j, surv, out, self, split, cat_shift);
   };
   unsigned int fill = 0;  // the warp's queued pairs (warp-uniform, below 32 between steps)
   const unsigned long long stride = static_cast<unsigned long long>(gridDim.x) * blockDim.x;
