@@ -3471,16 +3471,17 @@ bool filterDecides() { return detail::switchKnob("KDET_FCL_CUDA_FILTER_DECIDES",
 bool filterQueue() { return detail::switchKnob("KDET_FCL_CUDA_FILTER_QUEUE", true); }
 
 /// Launches the plane filter (grid-stride over the device-side candidate count: 8 blocks of 256
-/// threads per SM); a self query's pairs (self) go to `out` as selfExactKernel emits them.
+/// threads per SM, or the queued kernel's resident blocks); a self query's pairs (self) go to
+/// `out` as selfExactKernel emits them.
 template <class S>
 void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
                        const std::uint32_t* ta, const Vec3<S>* vb, const std::uint32_t* tb,
                        const PairSink& surv, const PairSink& out, bool self, std::uint32_t split,
                        int cat_shift, bool decides) {
   const auto blocks = static_cast<unsigned int>(8 * g_num_sms);
-  const auto run = [&](auto kernel) {
-    kernel<<<blocks, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity, va, ta, vb, tb,
-                                           surv, out, self, split, cat_shift);
+  const auto run = [&](auto kernel, unsigned int grid) {
+    kernel<<<grid, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity, va, ta, vb, tb,
+                                         surv, out, self, split, cat_shift);
   };
   const bool capped = filterMinBlocks() != 1;
   // The deciding filter, uncapped, took 107 registers (float); at 3 blocks per SM, 80 and no
@@ -3490,10 +3491,12 @@ void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
     // finishes its queued ones 32 at a time (8 per SM, a warp's queue rarely filled: 43.6 µs
     // against 36.5 on the cloth ball, call 3 of results/gpu-h100-session31).
     const auto kernel = capped ? planeFilterQueuedKernel<S, 6> : planeFilterQueuedKernel<S, 3>;
-    kernel<<<residentBlocks(kernel, blocks, kFilterBlock), kFilterBlock, 0, s>>>(
-        cand.pairs, cand.count, cand.capacity, va, ta, vb, tb, surv, out, self, split, cat_shift);
-  } else if (decides) run(capped ? planeFilterKernel<S, 6, true> : planeFilterKernel<S, 3, true>);
-  else run(capped ? planeFilterKernel<S, 6, false> : planeFilterKernel<S, 1, false>);
+    run(kernel, residentBlocks(kernel, blocks, kFilterBlock));
+  } else if (decides) {
+    run(capped ? planeFilterKernel<S, 6, true> : planeFilterKernel<S, 3, true>, blocks);
+  } else {
+    run(capped ? planeFilterKernel<S, 6, false> : planeFilterKernel<S, 1, false>, blocks);
+  }
   checkLaunch();
 }
 
