@@ -467,9 +467,9 @@ __global__ void countClearKernel(unsigned long long* __restrict__ slots, std::ui
 /// fillKernel's entries (index order, no size sort), one thread per entry e < cap, each counted
 /// in the slot of its cell's compact key (found, or claimed with atomicCAS along the probe
 /// sequence that a lookup walks): per entry its slot, its rank among the slot's entries and its
-/// value (entryValue). Entry e's triangle is the last i with offsets[i] <= e (a binary search
-/// over the scan of the triangles' cell counts), its cell the (e - offsets[i])-th of the
-/// triangle's range in fillKernel's order (x, then y, then z). More distinct cells than
+/// value (entryValue). Entry e's triangle is the last i with offsets[i] <= e (warpEntryTriangle:
+/// the warp searches the scan of the triangles' cell counts), its cell the (e - offsets[i])-th
+/// of the triangle's range in fillKernel's order (x, then y, then z). More distinct cells than
 /// `cell_cap`, a probe past the whole table or a key of all ones set need_sync (the query then
 /// rebuilds with read-backs and reruns). need_sync is read once per thread, not per entry:
 /// polling it shares the sector of the counters' atomics, and work done after it is set is
@@ -485,15 +485,12 @@ __global__ void __launch_bounds__(kBuildBlock)
                     std::uint32_t* __restrict__ ent_rank, std::uint32_t* __restrict__ ent_val,
                     std::uint32_t cap, std::uint32_t cell_cap) {
   const std::uint32_t e = blockIdx.x * blockDim.x + threadIdx.x;
+  const std::uint32_t e0 = e - (threadIdx.x & 31u);  // the warp's first entry
   const std::uint32_t total = __ldg(offsets + n);
   if (e == 0) info->entries = total;
+  if (e0 >= cap || e0 >= total) return;  // (the whole warp)
+  const std::uint32_t i = warpEntryTriangle(offsets, n, e0, e);
   if (e >= cap || e >= total || info->need_sync) return;
-  std::uint32_t i = 0, past = n;  // offsets[i] <= e < offsets[past]
-  while (past - i > 1) {
-    const std::uint32_t mid = i + (past - i) / 2;
-    if (__ldg(offsets + mid) <= e) i = mid;
-    else past = mid;
-  }
   const int l = level[i];
   const detail::CellRange r = detail::cellRange(toDoubleBox(box[i]), l, info->grid);
   const std::uint64_t ny = static_cast<std::uint64_t>(r.hi[1] - r.lo[1] + 1);

@@ -591,6 +591,49 @@ __device__ __forceinline__ int warpOwnerOf(std::uint32_t incl, std::uint32_t t) 
   return owner;
 }
 
+/// The triangle of entry e: the last i < n with offsets[i] <= e, where offsets (n + 1 words,
+/// non-decreasing, offsets[n] the entries' total) is the exclusive scan of the triangles' entry
+/// counts, for a warp whose lanes hold consecutive entries e = e0 + lane (e0: the warp's first,
+/// below offsets[n]). A lane's own binary search is a chain of log2(n) dependent loads (17 on
+/// the cloth ball; the counting build's fill kernel, which ran one per entry, waits on its loads:
+/// long scoreboard, 41 of its 53 cycles per instruction on the cloth ball, ncu). Here the warp
+/// searches e0's triangle i0 with 32 probes at once (log32(n) loads, 4 on the cloth ball), and
+/// one coalesced load brings the first entries of triangles i0 + 1 .. i0 + 32: as a triangle
+/// holds at least one entry, each lane's lies among them. Where some hold none (not a mesh of
+/// finite coordinates), a lane whose entry lies past them searches the rest alone. Every lane
+/// must call, with the same e0.
+__device__ __forceinline__ std::uint32_t warpEntryTriangle(
+    const std::uint32_t* __restrict__ offsets, std::uint32_t n, std::uint32_t e0,
+    std::uint32_t e) {
+  constexpr unsigned int kFull = 0xFFFFFFFFu;
+  const unsigned int lane = threadIdx.x & 31u;
+  // offsets[lo] <= e0, and hi == n or offsets[hi] > e0. Lane k probes lo + floor(k (hi - lo)
+  // / 32): non-decreasing in k, so the lanes whose probe is at most e0 are a prefix (lane 0's,
+  // lo, is one), and each step leaves at most ceil((hi - lo) / 32) of the range.
+  std::uint32_t lo = 0, hi = n;
+  while (hi - lo > 1) {
+    const std::uint32_t p =
+        lo + static_cast<std::uint32_t>((static_cast<std::uint64_t>(hi - lo) * lane) >> 5);
+    const int m = __popc(__ballot_sync(kFull, __ldg(offsets + p) <= e0));
+    const std::uint32_t last = __shfl_sync(kFull, p, m - 1);
+    const std::uint32_t next = __shfl_sync(kFull, p, m & 31);  // (lane m's; m < 32)
+    lo = last;
+    if (m < 32) hi = next;
+  }
+  // Lane k: the first entry of triangle lo + 1 + k (offsets[n] closes the last triangle).
+  const std::uint32_t t = lo + 1 + lane;
+  const std::uint32_t start = t <= n ? __ldg(offsets + t) : 0xFFFFFFFFu;
+  const int k = warpOwnerOf(start, e);  // the first lane whose triangle starts past e
+  if (__shfl_sync(kFull, start, 31) > e) return lo + static_cast<std::uint32_t>(k);
+  std::uint32_t i = lo + 32, past = n;  // triangles without entries: offsets[i] <= e
+  while (past - i > 1) {
+    const std::uint32_t mid = i + (past - i) / 2;
+    if (__ldg(offsets + mid) <= e) i = mid;
+    else past = mid;
+  }
+  return i;
+}
+
 /// The warp-wide form of scanCandidatesGroup: the same candidates (size rule, box overlap,
 /// canonical cell), for 32 / P queries at once, P = 2^log_p lanes per query (1, 2, 4, ..., 32; lane
 /// l serves the query in slot l / P of q, this warp's slots; `query` is the lane's query, which

@@ -1,0 +1,115 @@
+// The warp's search for the triangle of each entry (cuda/device_hash.cuh, warpEntryTriangle), the
+// counting build's fill kernel's: for every entry, the last triangle whose first entry is at or
+// before it, as a binary search of the exclusive scan of the triangles' entry counts finds it.
+// Warps start where the kernel's start (every 32nd entry) and at every other offset, over scans
+// of 1 to 200,000 triangles with one to eight entries each, and with triangles of no entries
+// (runs longer than a warp among them), where a lane searches past the warp's window. Skips
+// without a device.
+
+#include <cuda_runtime.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cuda/device_hash.cuh"
+
+namespace {
+
+bool haveDevice() {
+  int n = 0;
+  return cudaGetDeviceCount(&n) == cudaSuccess && n > 0;
+}
+
+/// Thread k of the grid takes entry shift + k (its warp's first: shift + k rounded down to the
+/// warp), for the entries below offsets[n].
+__global__ void entryTriangleKernel(const std::uint32_t* offsets, std::uint32_t n,
+                                    std::uint32_t shift, std::uint32_t* out) {
+  const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+  const std::uint32_t e = shift + k, e0 = e - (threadIdx.x & 31u);
+  const std::uint32_t total = offsets[n];
+  if (e0 >= total) return;
+  const std::uint32_t i = kdet_fcl::cuda::warpEntryTriangle(offsets, n, e0, e);
+  if (e < total) out[e] = i;
+}
+
+/// The exclusive scan of `counts` (n + 1 words).
+std::vector<std::uint32_t> scanOf(const std::vector<std::uint32_t>& counts) {
+  std::vector<std::uint32_t> off(counts.size() + 1, 0);
+  for (std::size_t i = 0; i < counts.size(); ++i) off[i + 1] = off[i] + counts[i];
+  return off;
+}
+
+/// Every entry's triangle from the device (threads from entry `shift`), against the host's.
+void check(const std::vector<std::uint32_t>& counts, std::uint32_t shift, const std::string& what) {
+  const std::vector<std::uint32_t> off = scanOf(counts);
+  const auto n = static_cast<std::uint32_t>(counts.size());
+  const std::uint32_t total = off[n];
+  ASSERT_GT(total, shift) << what;
+  std::uint32_t *d_off = nullptr, *d_out = nullptr;
+  ASSERT_EQ(cudaMalloc(&d_off, off.size() * sizeof(std::uint32_t)), cudaSuccess);
+  ASSERT_EQ(cudaMalloc(&d_out, total * sizeof(std::uint32_t)), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(d_off, off.data(), off.size() * sizeof(std::uint32_t),
+                       cudaMemcpyHostToDevice),
+            cudaSuccess);
+  ASSERT_EQ(cudaMemset(d_out, 0xFF, total * sizeof(std::uint32_t)), cudaSuccess);
+  const std::uint32_t threads = total - shift;
+  entryTriangleKernel<<<(threads + 127) / 128, 128>>>(d_off, n, shift, d_out);
+  ASSERT_EQ(cudaDeviceSynchronize(), cudaSuccess) << what;
+  std::vector<std::uint32_t> got(total);
+  ASSERT_EQ(cudaMemcpy(got.data(), d_out, total * sizeof(std::uint32_t), cudaMemcpyDeviceToHost),
+            cudaSuccess);
+  cudaFree(d_off);
+  cudaFree(d_out);
+  std::size_t wrong = 0;
+  for (std::uint32_t e = shift; e < total; ++e) {
+    // The last i with off[i] <= e.
+    const auto want = static_cast<std::uint32_t>(
+        std::upper_bound(off.begin(), off.begin() + n, e) - off.begin() - 1);
+    if (got[e] != want && ++wrong <= 5)
+      ADD_FAILURE() << what << ": entry " << e << " gave triangle " << got[e] << ", not " << want;
+  }
+  EXPECT_EQ(wrong, 0u) << what;
+}
+
+TEST(CudaWarpSearch, EachEntrysTriangleIsTheBinarySearchs) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<std::uint32_t> cells(1, 8);
+  for (const std::uint32_t n : {1u, 2u, 31u, 32u, 33u, 1000u, 92230u, 200000u}) {
+    std::vector<std::uint32_t> counts(n);
+    for (auto& c : counts) c = cells(rng);
+    const std::string what = std::to_string(n) + " triangles";
+    check(counts, 0, what);
+    for (const std::uint32_t shift : {1u, 17u, 31u})
+      if (scanOf(counts).back() > shift)
+        check(counts, shift, what + ", from entry " + std::to_string(shift));
+  }
+  // One entry each: every warp's 32 entries are its 32 triangles.
+  check(std::vector<std::uint32_t>(5000, 1), 0, "one entry each");
+}
+
+TEST(CudaWarpSearch, EntriesPastTrianglesWithoutEntriesAreFound) {
+  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  std::mt19937 rng(12);
+  std::uniform_int_distribution<std::uint32_t> cells(0, 3);
+  for (const std::uint32_t n : {40u, 3000u, 100000u}) {
+    std::vector<std::uint32_t> counts(n);
+    for (auto& c : counts) c = cells(rng);
+    counts[0] = 0;  // the first triangles hold none
+    counts[1] = 0;
+    // A run of 100 triangles without entries, and one of exactly 32, inside the warps' windows.
+    for (std::uint32_t i = n / 3; i < std::min(n, n / 3 + 100); ++i) counts[i] = 0;
+    for (std::uint32_t i = 2 * n / 3; i < std::min(n, 2 * n / 3 + 32); ++i) counts[i] = 0;
+    counts[n - 1] = 0;  // and the last
+    const std::string what = std::to_string(n) + " triangles, some without entries";
+    for (const std::uint32_t shift : {0u, 5u})
+      if (scanOf(counts).back() > shift)
+        check(counts, shift, what + ", from entry " + std::to_string(shift));
+  }
+}
+
+}  // namespace
