@@ -1,10 +1,10 @@
 // The warp's search for the triangle of each entry (cuda/device_hash.cuh, warpEntryTriangle), the
 // counting build's fill kernel's: for every entry, the last triangle whose first entry is at or
 // before it, as a binary search of the exclusive scan of the triangles' entry counts finds it.
-// Warps start where the kernel's start (every 32nd entry) and at every other offset, over scans
-// of 1 to 200,000 triangles with one to eight entries each, and with triangles of no entries
-// (runs longer than a warp among them), where a lane searches past the warp's window. Skips
-// without a device.
+// Warps start where the kernel's start (every 32nd entry) and 1, 5, 17 or 31 entries later, over
+// scans of 1 to 200,000 triangles with one to eight entries each, and with triangles of no
+// entries (runs longer than a warp among them), where a lane searches past the warp's window.
+// Skips without a device.
 
 #include <cuda_runtime.h>
 #include <gtest/gtest.h>
