@@ -1313,6 +1313,20 @@ __device__ __forceinline__ bool strictlyOneSide(const Vec3<S>* __restrict__ qv,
   return detail::orient3dFilterSign(plane, detail::toDouble(pv[pt[2]])) == s;
 }
 
+/// Calls f(i, j, p0, p1, p2, q0, q1, q2) for candidate c = (i << 32) | j: A's triangle i
+/// (vertices va, indices ta) and B's triangle j (vb, tb), their vertices loaded here.
+template <class S, class F>
+__device__ __forceinline__ void withPairVertices(unsigned long long c,
+                                                 const Vec3<S>* __restrict__ va,
+                                                 const std::uint32_t* __restrict__ ta,
+                                                 const Vec3<S>* __restrict__ vb,
+                                                 const std::uint32_t* __restrict__ tb, F&& f) {
+  const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
+  const std::uint32_t* const p = ta + 3 * std::size_t(i);
+  const std::uint32_t* const q = tb + 3 * std::size_t(j);
+  f(i, j, va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]]);
+}
+
 /// The deciding filter's verdict v on candidate (i, j): a colliding pair to `out` as the exact
 /// kernel would emit it (self: emitSelfPair), an undecided one to `surv` for the exact kernel,
 /// nothing for a disjoint one.
@@ -1352,14 +1366,13 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
   for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
        k += gridDim.x * blockDim.x) {
     const unsigned long long c = cand[k];
-    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
     if constexpr (kDecide) {
-      const std::uint32_t* const p = ta + 3 * std::size_t(i);
-      const std::uint32_t* const q = tb + 3 * std::size_t(j);
-      emitVerdict(detail::trianglesFilterVerdict(va[p[0]], va[p[1]], va[p[2]], vb[q[0]],
-                                                 vb[q[1]], vb[q[2]]),
-                  i, j, surv, out, self, split, cat_shift);
+      withPairVertices(c, va, ta, vb, tb, [&](std::uint32_t i, std::uint32_t j, const auto&... v) {
+        emitVerdict(detail::trianglesFilterVerdict(v...), i, j, surv, out, self, split,
+                    cat_shift);
+      });
     } else {
+      const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
       const bool drop =
           strictlyOneSide(vb, tb + 3 * std::size_t(j), va, ta + 3 * std::size_t(i)) ||
           strictlyOneSide(va, ta + 3 * std::size_t(i), vb, tb + 3 * std::size_t(j));
@@ -1394,17 +1407,15 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
   const unsigned long long m = *count < capacity ? *count : capacity;
   // The last step of pair c whose signs are `bits` (bit k: sp[k] > 0, bit 3 + k: sq[k] > 0).
   const auto finish = [&](unsigned long long c, unsigned int bits) {
-    const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-    const std::uint32_t* const p = ta + 3 * std::size_t(i);
-    const std::uint32_t* const q = tb + 3 * std::size_t(j);
     int sp[3], sq[3];
     for (int k = 0; k < 3; ++k) {
       sp[k] = (bits >> k) & 1u ? 1 : -1;
       sq[k] = (bits >> (3 + k)) & 1u ? 1 : -1;
     }
-    emitVerdict(detail::transversalFilterVerdict(sp, sq, va[p[0]], va[p[1]], va[p[2]], vb[q[0]],
-                                                 vb[q[1]], vb[q[2]]),
-                i, j, surv, out, self, split, cat_shift);
+    withPairVertices(c, va, ta, vb, tb, [&](std::uint32_t i, std::uint32_t j, const auto&... v) {
+      emitVerdict(detail::transversalFilterVerdict(sp, sq, v...), i, j, surv, out, self, split,
+                  cat_shift);
+    });
   };
   unsigned int fill = 0;  // the warp's queued pairs (warp-uniform, below 32 between steps)
   const unsigned long long stride = static_cast<unsigned long long>(gridDim.x) * blockDim.x;
@@ -1417,19 +1428,17 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
     unsigned long long c = 0;
     if (k < m) {
       c = cand[k];
-      const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
-      const std::uint32_t* const p = ta + 3 * std::size_t(i);
-      const std::uint32_t* const q = tb + 3 * std::size_t(j);
-      int sp[3], sq[3];
-      detail::FilterVerdict v;
-      if (detail::planeFilterSigns(va[p[0]], va[p[1]], va[p[2]], vb[q[0]], vb[q[1]], vb[q[2]], sp,
-                                   sq, v)) {
-        queue = true;
-        for (int e = 0; e < 3; ++e)
-          bits |= (sp[e] > 0 ? 1u : 0u) << e | (sq[e] > 0 ? 1u : 0u) << (3 + e);
-      } else if (v == detail::FilterVerdict::Undecided) {
-        emitPair(surv, i, j);
-      }
+      withPairVertices(c, va, ta, vb, tb, [&](std::uint32_t i, std::uint32_t j, const auto&... v) {
+        int sp[3], sq[3];
+        detail::FilterVerdict verdict;
+        if (detail::planeFilterSigns(v..., sp, sq, verdict)) {
+          queue = true;
+          for (int e = 0; e < 3; ++e)
+            bits |= (sp[e] > 0 ? 1u : 0u) << e | (sq[e] > 0 ? 1u : 0u) << (3 + e);
+        } else if (verdict == detail::FilterVerdict::Undecided) {
+          emitPair(surv, i, j);
+        }
+      });
     }
     const unsigned int mask = __ballot_sync(kFull, queue);
     if (queue) {

@@ -14,15 +14,11 @@
 #include <vector>
 
 #include "cuda/device_hash.cuh"
+#include "cuda_device.h"
 
 namespace {
 
 using kdet_fcl::detail::Aabb;
-
-bool haveDevice() {
-  int n = 0;
-  return cudaGetDeviceCount(&n) == cudaSuccess && n > 0;
-}
 
 __global__ void floatBoxTestKernel(std::size_t n, const Aabb<double>* q, const Aabb<float>* e,
                                    int* out) {
@@ -45,7 +41,7 @@ std::vector<double> around(float f) {
 }
 
 TEST(CudaFloatBoxTest, DecidesExactlyWhatTheDoubleTestDecides) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   std::mt19937 rng(5);
   std::vector<float> pivots = {0.f, 1.f, -1.f, 0.1f, -0.3f, 1e-30f, -1e-30f, 3.5e7f, FLT_MAX,
                                -FLT_MAX, FLT_MIN, 1e30f};

@@ -25,14 +25,10 @@
 #include <vector>
 
 #include "cuda/staged_upload.h"
+#include "cuda_device.h"
 #include "scoped_env.h"
 
 namespace {
-
-bool haveDevice() {
-  int n = 0;
-  return cudaGetDeviceCount(&n) == cudaSuccess && n > 0;
-}
 
 /// A device buffer of `bytes` + kGuard, a pinned stage of `bytes` and a stream, for the upload
 /// tests; check() uploads a range with `upload` and compares what arrived, and the guard bytes
@@ -75,7 +71,7 @@ using kdet_fcl::staging::uploadChunk;
 using kdet_fcl::staging::uploadThreads;
 
 TEST(StagedUpload, EveryByteArrivesAndNothingBeyondForAnyThreadsAndChunks) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t max_bytes = (std::size_t(3) << 20) + 7;
   UploadRig rig(max_bytes);
   std::mt19937 rng(7);
@@ -140,7 +136,7 @@ TEST(PinnedUpload, ThePageInteriorIsEveryWholePageInside) {
 // page and of every size around a page; a range registered once cannot be registered again
 // until its registration is dropped (so a leaked registration would show).
 TEST(PinnedUpload, EveryByteArrivesFromARegisteredRange) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t page = std::size_t(sysconf(_SC_PAGESIZE));
   const std::size_t max_bytes = (std::size_t(3) << 20) + 7;
   UploadRig rig(max_bytes);
@@ -198,7 +194,7 @@ void checkDownload(const T* dev, const std::vector<T>& src, std::size_t shift, s
 }
 
 TEST(StagedDownload, EveryElementArrivesInOrderForAnyChunk) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t max_bytes = (std::size_t(3) << 20) + 7;
   std::mt19937 rng(11);
   std::vector<unsigned char> bytes(max_bytes + 128);
@@ -236,7 +232,7 @@ TEST(StagedDownload, EveryElementArrivesInOrderForAnyChunk) {
 }
 
 TEST(StagedDownload, AThrowingConsumerLeavesCleanlyAndTheNextCopyWorks) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t bytes = (std::size_t(1) << 20) + 3;
   std::vector<unsigned char> src(bytes);
   for (std::size_t i = 0; i < bytes; ++i) src[i] = static_cast<unsigned char>(i * 7 + 1);
@@ -343,7 +339,7 @@ TEST(CopyPool, RunsTheWorkOnTheThreadsAskedForAndKeepsThem) {
 }
 
 TEST(PooledDownload, EveryElementArrivesIntoAKeptVectorWhateverItHeld) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t most = (std::size_t(1) << 18) + 3;  // pairs: 2 MiB
   std::vector<Pair8> src(most);
   for (std::size_t i = 0; i < most; ++i)
@@ -384,7 +380,7 @@ TEST(PooledDownload, EveryElementArrivesIntoAKeptVectorWhateverItHeld) {
 }
 
 TEST(PooledDownload, ReadyRunsAfterTheFirstChunkAndAThrowLeavesCleanly) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t n = 100000;
   std::vector<Pair8> src(n);
   for (std::size_t i = 0; i < n; ++i) src[i] = {static_cast<std::uint32_t>(i), 7u};

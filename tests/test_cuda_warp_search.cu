@@ -16,13 +16,9 @@
 #include <vector>
 
 #include "cuda/device_hash.cuh"
+#include "cuda_device.h"
 
 namespace {
-
-bool haveDevice() {
-  int n = 0;
-  return cudaGetDeviceCount(&n) == cudaSuccess && n > 0;
-}
 
 /// Thread k of the grid takes entry shift + k (its warp's first: shift + k rounded down to the
 /// warp), for the entries below offsets[n].
@@ -76,7 +72,7 @@ void check(const std::vector<std::uint32_t>& counts, std::uint32_t shift, const 
 }
 
 TEST(CudaWarpSearch, EachEntrysTriangleIsTheBinarySearchs) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   std::mt19937 rng(11);
   std::uniform_int_distribution<std::uint32_t> cells(1, 8);
   for (const std::uint32_t n : {1u, 2u, 31u, 32u, 33u, 1000u, 92230u, 200000u}) {
@@ -93,7 +89,7 @@ TEST(CudaWarpSearch, EachEntrysTriangleIsTheBinarySearchs) {
 }
 
 TEST(CudaWarpSearch, EntriesPastTrianglesWithoutEntriesAreFound) {
-  if (!haveDevice()) GTEST_SKIP() << "no CUDA device";
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   std::mt19937 rng(12);
   std::uniform_int_distribution<std::uint32_t> cells(0, 3);
   for (const std::uint32_t n : {40u, 3000u, 100000u}) {
