@@ -974,6 +974,8 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                              PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
+  __shared__ std::uint32_t ring_tris[kQueryBlock / 32][64];         // (EntryRing)
+  __shared__ std::uint8_t ring_tags[kQueryBlock / 32][64];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -998,6 +1000,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     }
     scanCandidatesWarp<kSpans>(
         M, cInfo(0), q, mine, log_p, max_visit, by_index, fixed_cells,
+        ring_tris[threadIdx.x >> 5], ring_tags[threadIdx.x >> 5],
         [&](const WarpQuery& o, std::uint32_t j, double dj) {
           return dj > o.d || (dj == o.d && j > o.id);
         },
@@ -1042,7 +1045,9 @@ __device__ __forceinline__ Aabb<S> loadBoxOf(const Aabb<S>* p) {
 /// whatever row they belong to (prefix sum and owner search, as scanCandidatesWarp), each row in
 /// visits of at most max_visit partners. kSpans: a pair whose sub-cell spans in the cell do not
 /// overlap (both entries' spans: subcellSpan is monotone, so boxes that overlap have overlapping
-/// spans) is dropped before the partner's box is loaded. The round's share of the tasks
+/// spans) is dropped before the partner's box is loaded, and the partners that pass (few per
+/// round in crowded cells) wait on the warp's EntryRing until 32 are there, or the task ends, to
+/// be tested together (kQueueSeen, as in scanCandidatesWarp). The round's share of the tasks
 /// (roundTask) comes from the counter `tasks`; the grid is the resident blocks. Only the cells
 /// this build stored are read (info.cells against cell_cap; none after need_sync): a re-hash that
 /// did not fit reruns the query anyway (checkPending). Each warp adds the candidates it emitted
@@ -1059,6 +1064,9 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
   __shared__ TriIndices row_tris[kQueryBlock / 32][32];  // (by_index)
   __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
+  __shared__ std::uint32_t ring_tris[kQueryBlock / 32][64];         // (EntryRing)
+  __shared__ std::uint8_t ring_tags[kQueryBlock / 32][64];
+  EntryRing ring{ring_tris[threadIdx.x >> 5], ring_tags[threadIdx.x >> 5], 0u, 0u};
   Aabb<S>* const row_box = row_boxes[threadIdx.x >> 5];
   TriIndices* const row_tri = row_tris[threadIdx.x >> 5];
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
@@ -1096,6 +1104,29 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
       if (by_index) row_tri[lane] = loadTri(M.t, v & kEntryTriMask);
     }
     __syncwarp();
+    // A partner's last tests (have: the lane holds one; i, j: the row's and the partner's
+    // triangles; row: the row's lane): the box test and the adjacency rule; then the emission
+    // as (min, max), in every lane.
+    const auto test = [&](bool have, std::uint32_t i, std::uint32_t j, std::uint8_t row) {
+      bool hit = false;
+      if (have) {
+        const Aabb<S> e = loadBoxOf(M.box + j);
+        // (by_index: the partner's vertex indices come in the same round trip as its box.)
+        const TriIndices tj = by_index ? loadTri(M.t, j) : TriIndices{0, 0, 0};
+        bool overlap;
+        if constexpr (std::is_same<S, float>::value) overlap = boxesInFloat(row_box[row], e);
+        else overlap = detail::boxesOverlap(row_box[row], e);
+        hit = overlap && (by_index ? selfCandidateByIndex(split, i, j, row_tri[row], tj)
+                                   : selfCandidate(M, split, i, j, false));
+      }
+      found += __popc(__ballot_sync(kFull, hit));
+      emitFromWarp(cand, stage, hit, i < j ? i : j, i < j ? j : i);
+    };
+    // The same for a partner off the warp's EntryRing (kQueueSeen), tagged with its row: the
+    // row's entry comes from the row's lane.
+    const auto test_queued = [&](bool have, std::uint32_t j, std::uint8_t row) {
+      test(have, __shfl_sync(kFull, v, row) & kEntryTriMask, j, row);
+    };
     while (true) {
       const std::uint32_t cnt = stop - next < max_visit ? stop - next : max_visit;
       const std::uint32_t incl = warpInclusiveSum(cnt);
@@ -1111,35 +1142,31 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
         const std::uint32_t o_end = __shfl_sync(kFull, end, owner);
         const std::uint32_t o_v = __shfl_sync(kFull, v, owner);
         const std::uint32_t o_span = kSpans ? __shfl_sync(kFull, span, owner) : 0u;
-        bool hit = false;
-        std::uint32_t i = 0, j = 0;
-        do {  // (once: `break` skips to the emission, where the warp meets again)
-          if (t >= total) break;
+        bool seen = false;
+        std::uint32_t w = 0;
+        if (t < total) {
           // The partner at position q of row a's cyclic list.
           const std::uint32_t m = o_end - o_begin, a = first + owner - o_begin;
           const std::uint32_t q = o_next + (t - o_first);
           std::uint32_t bpos = q < (m - 1) / 2 ? a + 1 + q : a + m / 2;
           if (bpos >= m) bpos -= m;
           const std::uint32_t b = o_begin + bpos;
-          const std::uint32_t w = __ldg(M.entry_tri + b);
+          w = __ldg(M.entry_tri + b);
           // This cell is the pair's canonical cell, and (kSpans) their spans overlap in it.
-          if (((o_v | w) >> 29) != 7u) break;
-          if (kSpans && !detail::subcellSpansOverlap(o_span, __ldg(M.entry_span + b))) break;
-          i = o_v & kEntryTriMask, j = w & kEntryTriMask;
-          const Aabb<S> e = loadBoxOf(M.box + j);
-          // (by_index: the partner's vertex indices come in the same round trip as its box.)
-          const TriIndices tj = by_index ? loadTri(M.t, j) : TriIndices{0, 0, 0};
-          bool overlap;
-          if constexpr (std::is_same<S, float>::value) overlap = boxesInFloat(row_box[owner], e);
-          else overlap = detail::boxesOverlap(row_box[owner], e);
-          hit = overlap && (by_index ? selfCandidateByIndex(split, i, j, row_tri[owner], tj)
-                                     : selfCandidate(M, split, i, j, false));
-        } while (false);
-        found += __popc(__ballot_sync(kFull, hit));
-        emitFromWarp(cand, stage, hit, i < j ? i : j, i < j ? j : i);
+          seen = ((o_v | w) >> 29) == 7u &&
+                 (!kSpans || detail::subcellSpansOverlap(o_span, __ldg(M.entry_span + b)));
+        }
+        if constexpr (kQueueSeen<kSpans>) {
+          pushRing(ring, seen, w & kEntryTriMask, static_cast<std::uint8_t>(owner));
+          if (ring.count >= 32) popRing(ring, 32, test_queued);
+        } else {
+          test(seen, o_v & kEntryTriMask, w & kEntryTriMask, static_cast<std::uint8_t>(owner));
+        }
       }
       next += cnt;
     }
+    if constexpr (kQueueSeen<kSpans>)
+      popRing(ring, ring.count, test_queued);  // (the rows change with the task)
   }
   finishWarp(cand, stage);
   if (lane == 0 && found > 0) atomicAdd(cell_count, found);
@@ -1159,6 +1186,8 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                               unsigned long long* tasks) {
   __shared__ WarpQuery slots[kQueryBlock];
   __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
+  __shared__ std::uint32_t ring_tris[kQueryBlock / 32][64];         // (EntryRing)
+  __shared__ std::uint8_t ring_tags[kQueryBlock / 32][64];
   WarpQuery* q = slots + (threadIdx.x & ~31u);
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -1201,6 +1230,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     if (a_side)
       scanCandidatesWarp<kSpans>(
           B, target, q, mine, log_p, max_visit, false, fixed_cells,
+          ring_tris[threadIdx.x >> 5], ring_tags[threadIdx.x >> 5],
           [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
           [](const WarpQuery& o, std::uint32_t j, const TriIndices&, std::uint32_t& a,
              std::uint32_t& b) {
@@ -1211,6 +1241,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     else
       scanCandidatesWarp<kSpans>(
           A, target, q, mine, log_p, max_visit, false, fixed_cells,
+          ring_tris[threadIdx.x >> 5], ring_tags[threadIdx.x >> 5],
           [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
           [](const WarpQuery& o, std::uint32_t i, const TriIndices&, std::uint32_t& a,
              std::uint32_t& b) {

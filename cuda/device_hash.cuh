@@ -634,6 +634,61 @@ __device__ __forceinline__ std::uint32_t warpEntryTriangle(
   return i;
 }
 
+/// A warp's queue of the entries that passed the canonical-cell and span tests
+/// (entrySeenHere), in its shared memory: 64 slots, each the entry's triangle and a tag (its
+/// query's slot in the warp, and kRingAbove where the size rule holds unloaded). The warp-wide
+/// scans test 32 queued entries at once (their diameters, boxes and the caller's last rules),
+/// so that the loads and tests of a surviving entry run in full warps: in the rounds of 32
+/// entries only about 4 pass those tests on the cloth ball (ncu, benchmarks/RESULTS-gpu.md).
+struct EntryRing {
+  std::uint32_t* tri;  ///< 64 slots
+  std::uint8_t* tag;   ///< 64 slots
+  unsigned int head;   ///< first queued slot (warp-uniform)
+  unsigned int count;  ///< queued entries, at most 63 after a push (warp-uniform)
+};
+
+/// Whether the warp-wide scans queue their seen entries in an EntryRing: where they test sub-cell
+/// spans (kSpans, chosen for crowded meshes), few entries of a round are seen and the queue
+/// fills the warp; without spans most are, and the queue's own work costs more than it saves
+/// (H100, benchmarks/RESULTS-gpu.md: with spans, the cloth ball's scan 130 -> 112 us and its
+/// cells' pairs 95 -> 85 us; without, the sparse scenes' scans up to 10 % slower and the 1M
+/// cloth's candidate search 0.45 -> 0.51 ms). Else each round tests its own seen entries.
+template <bool kSpans>
+constexpr bool kQueueSeen = kSpans;
+
+/// EntryRing tag bit: the entry passes the size rule without its diameter (kAboveQueryLevel).
+constexpr std::uint8_t kRingAbove = 0x80u;
+
+/// Queues the lanes' entries whose `keep` is set (tri, tag) behind those queued, in lane order.
+/// The caller pops 32 whenever 32 or more are queued, so at most 31 wait before a push. Every
+/// lane of the warp must call.
+__device__ __forceinline__ void pushRing(EntryRing& r, bool keep, std::uint32_t tri,
+                                         std::uint8_t tag) {
+  const unsigned int lane = threadIdx.x & 31u;
+  const unsigned int kept = __ballot_sync(0xFFFFFFFFu, keep);
+  if (keep) {
+    const unsigned int at = (r.head + r.count + __popc(kept & ((1u << lane) - 1u))) & 63u;
+    r.tri[at] = tri;
+    r.tag[at] = tag;
+  }
+  r.count += static_cast<unsigned int>(__popc(kept));
+  __syncwarp();
+}
+
+/// Calls test(have, tri, tag) once in every lane for the first n (0..32) queued entries (lane l
+/// the l-th; have = l < n, else tri and tag are 0) and takes them off the queue. Every lane of
+/// the warp must call, with the same n.
+template <class Test>
+__device__ __forceinline__ void popRing(EntryRing& r, unsigned int n, Test&& test) {
+  const unsigned int lane = threadIdx.x & 31u;
+  const bool have = lane < n;
+  const unsigned int at = (r.head + lane) & 63u;
+  test(have, have ? r.tri[at] : 0u, have ? r.tag[at] : std::uint8_t{0});
+  __syncwarp();  // every lane has read its slot before a push reuses it
+  r.head = (r.head + n) & 63u;
+  r.count -= n;
+}
+
 /// The warp-wide form of scanCandidatesGroup: the same candidates (size rule, box overlap,
 /// canonical cell), for 32 / P queries at once, P = 2^log_p lanes per query (1, 2, 4, ..., 32; lane
 /// l serves the query in slot l / P of q, this warp's slots; `query` is the lane's query, which
@@ -653,14 +708,18 @@ __device__ __forceinline__ std::uint32_t warpEntryTriangle(
 /// is tested against. max_visit: 1..kMaxWarpVisit. The query's levels (query.levels) as scanCandidatesGroup's.
 /// `fixed_cells`: take each level's cell range from the query's fixed-point coordinates where the
 /// hash allows (fixedCells; a few shifts against a dozen rounded double operations and their
-/// clamps per level). Every lane of the warp must call, with warp-uniform arguments except
-/// `query`.
+/// clamps per level). `ring_tri` and `ring_tag` (64 slots each of the warp's shared memory): the
+/// warp's EntryRing, where kQueueSeen<kSpans> queues the entries that pass the canonical-cell and
+/// span tests and tests them 32 at a time (emit is then called per 32 queued entries, and for
+/// the rest before the return). Every lane of the warp must call, with warp-uniform arguments
+/// except `query`.
 template <bool kSpans, class S, class Accept, class Candidate, class Emit>
 __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
                                                    WarpQuery* q,
                                                    const WarpQuery& query, unsigned int log_p,
                                                    std::uint32_t max_visit, bool load_tri,
-                                                   bool fixed_cells, Accept&& accept,
+                                                   bool fixed_cells, std::uint32_t* ring_tri,
+                                                   std::uint8_t* ring_tag, Accept&& accept,
                                                    Candidate&& candidate, Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
@@ -685,6 +744,32 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
   c.p = sub;  // the lane's first position in the query's walk
   c.L = info.top_level + 1;
   if (mine.live) startLevel<kSpans>(c, mine, info, fixed, 0);
+  // A seen entry's last tests (have: the lane holds one; j, tag: its triangle and EntryRing
+  // tag): the size rule, the box and candidate(); then emit, in every lane.
+  EntryRing ring{ring_tri, ring_tag, 0u, 0u};
+  const auto test = [&](bool have, std::uint32_t j, std::uint8_t tag) {
+    bool hit = false;
+    std::uint32_t pa = 0, pb = 0;
+    if (have) {
+      const bool above = (tag & kRingAbove) != 0;
+      const double dj = above ? 0.0 : __ldg(h.diam + j);
+      // (load_tri: the entry's vertex indices come in the same round trip as its box.)
+      const TriIndices tj = load_tri ? loadTri(h.t, j) : TriIndices{0, 0, 0};
+      const WarpQuery& oq = q[tag & ~kRingAbove];
+      if constexpr (std::is_same<S, float>::value) {
+        // The diameter and the box are loaded together and tested without a short circuit:
+        // one round trip per entry (with the short circuit, each coordinate's load waited for
+        // the previous comparison: H100, benchmarks/RESULTS-gpu.md).
+        const detail::Aabb<float> e = loadBox(h.box + j);
+        if ((above || accept(oq, j, dj)) & boxesInFloat(oq.test, e))
+          hit = candidate(oq, j, tj, pa, pb);
+      } else {
+        if ((above || accept(oq, j, dj)) && detail::boxesOverlap(oq.box, boxOf(h, j)))
+          hit = candidate(oq, j, tj, pa, pb);
+      }
+    }
+    emit(hit, pa, pb);
+  };
   while (true) {
     std::uint32_t begin = 0, qspan = detail::kWholeCellSpan;
     unsigned int ends = 0;
@@ -702,36 +787,28 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
       const std::uint32_t o_begin = __shfl_sync(kFull, begin, owner);
       const unsigned int o_ends = __shfl_sync(kFull, ends, owner);
       const std::uint32_t o_qspan = kSpans ? __shfl_sync(kFull, qspan, owner) : 0u;
-      bool hit = false;
-      std::uint32_t pa = 0, pb = 0;
+      bool seen = false;
+      std::uint32_t v = 0;
       if (t < total) {
         const std::uint32_t k = o_begin + (t - o_first);
-        const std::uint32_t v = __ldg(h.entry_tri + k);
+        v = __ldg(h.entry_tri + k);
         const std::uint32_t espan = kSpans ? __ldg(h.entry_span + k) : 0u;
-        if (entrySeenHere<kSpans>(v, o_ends, espan, o_qspan)) {
-          const std::uint32_t j = v & kEntryTriMask;
-          // Above the query's own level the size rule holds (WarpQuery::size_level): no load.
-          const bool above = (o_ends & kAboveQueryLevel) != 0;
-          const double dj = above ? 0.0 : __ldg(h.diam + j);
-          // (load_tri: the entry's vertex indices come in the same round trip as its box.)
-          const TriIndices tj = load_tri ? loadTri(h.t, j) : TriIndices{0, 0, 0};
-          const WarpQuery& oq = q[owner >> log_p];
-          if constexpr (std::is_same<S, float>::value) {
-            // The diameter and the box are loaded together and tested without a short circuit:
-            // one round trip per entry (with the short circuit, each coordinate's load waited
-            // for the previous comparison: H100, benchmarks/RESULTS-gpu.md).
-            const detail::Aabb<float> e = loadBox(h.box + j);
-            if ((above || accept(oq, j, dj)) & boxesInFloat(oq.test, e))
-              hit = candidate(oq, j, tj, pa, pb);
-          } else {
-            if ((above || accept(oq, j, dj)) && detail::boxesOverlap(oq.box, boxOf(h, j)))
-              hit = candidate(oq, j, tj, pa, pb);
-          }
-        }
+        seen = entrySeenHere<kSpans>(v, o_ends, espan, o_qspan);
       }
-      emit(hit, pa, pb);
+      // Above the query's own level the size rule holds (WarpQuery::size_level): no load.
+      const std::uint32_t j = v & kEntryTriMask;
+      const auto tag = static_cast<std::uint8_t>(
+          (owner >> log_p) | ((o_ends & kAboveQueryLevel) ? kRingAbove : 0u));
+      if constexpr (kQueueSeen<kSpans>) {
+        pushRing(ring, seen, j, tag);
+        if (ring.count >= 32) popRing(ring, 32, test);
+      } else {
+        test(seen, j, tag);
+      }
     }
   }
+  if constexpr (kQueueSeen<kSpans>)
+    popRing(ring, ring.count, test);  // (the slots' queries change after the return)
 }
 
 #endif  // __CUDACC__

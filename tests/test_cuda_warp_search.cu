@@ -4,7 +4,8 @@
 // Warps start where the kernel's start (every 32nd entry) and 1, 5, 17 or 31 entries later, over
 // scans of 1 to 200,000 triangles with one to eight entries each, and with triangles of no
 // entries (runs longer than a warp among them), where a lane searches past the warp's window.
-// Skips without a device.
+// And the warp's queue of seen entries (EntryRing, the warp scans'): what comes off it, 32 at a
+// time and the rest at the end, is what went on, in order, with its tags. Skips without a device.
 
 #include <cuda_runtime.h>
 #include <gtest/gtest.h>
@@ -30,6 +31,36 @@ __global__ void entryTriangleKernel(const std::uint32_t* offsets, std::uint32_t 
   if (e0 >= total) return;
   const std::uint32_t i = kdet_fcl::cuda::warpEntryTriangle(offsets, n, e0, e);
   if (e < total) out[e] = i;
+}
+
+/// One warp per block: `rounds` rounds of 32 lanes; lane l of round r keeps its value
+/// r * 32 + l (tag r % 251) when bit l of keep[r] is set, pushes it on the warp's ring and, when
+/// 32 or more are queued (or, with drain_every > 0, every drain_every rounds, whatever is
+/// queued), pops them into out[] (value, tag) in the order they come off; then pops the rest.
+/// out[0] ends as the number popped.
+__global__ void ringKernel(const std::uint32_t* keep, std::uint32_t rounds,
+                           std::uint32_t drain_every, std::uint32_t* out) {
+  __shared__ std::uint32_t tri[64];
+  __shared__ std::uint8_t tag[64];
+  kdet_fcl::cuda::EntryRing ring{tri, tag, 0u, 0u};
+  const unsigned int lane = threadIdx.x & 31u;
+  std::uint32_t popped = 0;
+  const auto take = [&](bool have, std::uint32_t value, std::uint8_t t) {
+    if (have) {
+      out[1 + 2 * (popped + lane)] = value;
+      out[2 + 2 * (popped + lane)] = t;
+    }
+    popped += static_cast<std::uint32_t>(__popc(__ballot_sync(0xFFFFFFFFu, have)));
+  };
+  for (std::uint32_t r = 0; r < rounds; ++r) {
+    const bool kept = (keep[r] >> lane) & 1u;
+    kdet_fcl::cuda::pushRing(ring, kept, r * 32 + lane, static_cast<std::uint8_t>(r % 251));
+    if (ring.count >= 32) kdet_fcl::cuda::popRing(ring, 32, take);
+    if (drain_every > 0 && r % drain_every == drain_every - 1)
+      kdet_fcl::cuda::popRing(ring, ring.count, take);
+  }
+  kdet_fcl::cuda::popRing(ring, ring.count, take);
+  if (lane == 0) out[0] = popped;
 }
 
 /// The exclusive scan of `counts` (n + 1 words).
@@ -106,6 +137,50 @@ TEST(CudaWarpSearch, EntriesPastTrianglesWithoutEntriesAreFound) {
       if (scanOf(counts).back() > shift)
         check(counts, shift, what + ", from entry " + std::to_string(shift));
   }
+}
+
+TEST(CudaWarpSearch, TheRingOfSeenEntriesGivesBackWhatWentOnInOrder) {
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
+  std::mt19937 rng(13);
+  const std::uint32_t rounds = 2000;
+  // Rounds of each kind: none kept, all 32, one, 31, and random densities.
+  std::vector<std::uint32_t> keep(rounds);
+  for (std::uint32_t r = 0; r < rounds; ++r) {
+    switch (r % 7) {
+      case 0: keep[r] = 0u; break;
+      case 1: keep[r] = 0xFFFFFFFFu; break;
+      case 2: keep[r] = 1u << (rng() % 32); break;
+      case 3: keep[r] = ~(1u << (rng() % 32)); break;
+      default: keep[r] = rng() & rng() & (r % 2 ? rng() : 0xFFFFFFFFu); break;
+    }
+  }
+  std::vector<std::uint32_t> want;  // value, tag
+  for (std::uint32_t r = 0; r < rounds; ++r)
+    for (std::uint32_t l = 0; l < 32; ++l)
+      if ((keep[r] >> l) & 1u) want.insert(want.end(), {r * 32 + l, r % 251});
+  std::uint32_t *d_keep = nullptr, *d_out = nullptr;
+  const std::size_t out_words = 1 + 2 * 32 * rounds;
+  ASSERT_EQ(cudaMalloc(&d_keep, rounds * sizeof(std::uint32_t)), cudaSuccess);
+  ASSERT_EQ(cudaMalloc(&d_out, out_words * sizeof(std::uint32_t)), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(d_keep, keep.data(), rounds * sizeof(std::uint32_t),
+                       cudaMemcpyHostToDevice),
+            cudaSuccess);
+  // Popped only when 32 are queued, and also drained every round, every 3rd and every 64th.
+  for (const std::uint32_t drain : {0u, 1u, 3u, 64u}) {
+    const std::string what = "drained every " + std::to_string(drain) + " rounds";
+    ASSERT_EQ(cudaMemset(d_out, 0xFF, out_words * sizeof(std::uint32_t)), cudaSuccess);
+    ringKernel<<<1, 32>>>(d_keep, rounds, drain, d_out);
+    ASSERT_EQ(cudaDeviceSynchronize(), cudaSuccess) << what;
+    std::vector<std::uint32_t> got(out_words);
+    ASSERT_EQ(cudaMemcpy(got.data(), d_out, out_words * sizeof(std::uint32_t),
+                         cudaMemcpyDeviceToHost),
+              cudaSuccess);
+    ASSERT_EQ(got[0], want.size() / 2) << what;
+    const std::vector<std::uint32_t> items(got.begin() + 1, got.begin() + 1 + want.size());
+    EXPECT_EQ(items, want) << what;
+  }
+  cudaFree(d_keep);
+  cudaFree(d_out);
 }
 
 }  // namespace
