@@ -651,7 +651,7 @@ struct EntryRing {
 /// spans (kSpans, chosen for crowded meshes), few entries of a round are seen and the queue
 /// fills the warp; without spans most are, and the queue's own work costs more than it saves
 /// (H100, benchmarks/RESULTS-gpu.md: with spans, the cloth ball's scan 130 -> 112 us and its
-/// cells' pairs 95 -> 85 us; without, the sparse scenes' scans up to 10 % slower and the 1M
+/// cells' pairs 95 -> 86 us; without, the sparse scenes' scans up to 10 % slower and the 1M
 /// cloth's candidate search 0.45 -> 0.51 ms). Else each round tests its own seen entries.
 template <bool kSpans>
 constexpr bool kQueueSeen = kSpans;
