@@ -963,6 +963,24 @@ __device__ __forceinline__ void forEachWarpTask(unsigned long long* tasks,
   }
 }
 
+/// This warp's 32 / 2^log_p query slots (scanCandidatesWarp's q) in the block's dynamic shared
+/// memory, which the host sizes for 2^log_p lanes per query (warpSlotBytes), for the warp scans
+/// that test spans (crowded meshes, 8 lanes per query by default): 2.2 KB per block against the
+/// 17.4 KB of 32 slots per warp, which leaves the SM more L1 cache (H100, the cloth ball's scan:
+/// shared-memory configuration 196 -> 132 KB, L1 hits 50 -> 57 %, 112.8 -> 109.5 us;
+/// benchmarks/RESULTS-gpu.md). The scans without spans keep 32 static slots per warp: the
+/// dynamic slots' addressing cost them 1-2 % there.
+__device__ __forceinline__ WarpQuery* warpSlots(unsigned int log_p) {
+  extern __shared__ __align__(16) unsigned char warp_slot_memory[];
+  return reinterpret_cast<WarpQuery*>(warp_slot_memory) + (threadIdx.x >> 5) * (32u >> log_p);
+}
+
+/// The dynamic shared memory of a warp-wide scan's block for 2^log_p lanes per query: its query
+/// slots where it tests spans (warpSlots), else none.
+constexpr std::size_t warpSlotBytes(bool spans, unsigned int log_p) {
+  return spans ? std::size_t(kQueryBlock / 32) * (32u >> log_p) * sizeof(WarpQuery) : 0;
+}
+
 /// Phase 1 of a self query with the warp-wide scan (scanCandidatesWarp): 2^log_p lanes per query
 /// triangle, the same candidates as selfCandidatesKernel (level_skip likewise). Each task is the
 /// 32 / 2^log_p queries starting at task * (32 >> log_p) (forEachWarpTask).
@@ -972,11 +990,11 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                              std::uint32_t max_visit, int level_skip, bool size_by_level,
                              bool by_index, bool fixed_cells, std::uint32_t split, Round round,
                              PairSink cand, unsigned long long* tasks) {
-  __shared__ WarpQuery slots[kQueryBlock];
+  __shared__ WarpQuery slots[kSpans ? 1 : kQueryBlock];  // (with spans: warpSlots)
   __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
   __shared__ std::uint32_t ring_tris[kQueryBlock / 32][64];         // (EntryRing)
   __shared__ std::uint8_t ring_tags[kQueryBlock / 32][64];
-  WarpQuery* q = slots + (threadIdx.x & ~31u);
+  WarpQuery* q = kSpans ? warpSlots(log_p) : slots + (threadIdx.x & ~31u);
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
   const std::uint32_t per_warp = 32u >> log_p;
@@ -1184,11 +1202,11 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                               unsigned int log_p, std::uint32_t max_visit, bool size_by_level,
                               bool fixed_cells, Round round, PairSink cand,
                               unsigned long long* tasks) {
-  __shared__ WarpQuery slots[kQueryBlock];
+  __shared__ WarpQuery slots[kSpans ? 1 : kQueryBlock];  // (with spans: warpSlots)
   __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
   __shared__ std::uint32_t ring_tris[kQueryBlock / 32][64];         // (EntryRing)
   __shared__ std::uint8_t ring_tags[kQueryBlock / 32][64];
-  WarpQuery* q = slots + (threadIdx.x & ~31u);
+  WarpQuery* q = kSpans ? warpSlots(log_p) : slots + (threadIdx.x & ~31u);
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
   const std::uint32_t per_warp = 32u >> log_p;
@@ -3359,13 +3377,14 @@ struct WarpScanLaunch {
 /// than the device holds at once, as the occupancy calculator gives for `kernel` (cached per
 /// kernel; the context's mutex serialises the callers).
 template <class Kernel>
-unsigned int residentBlocks(Kernel* kernel, unsigned int all, int block = kQueryBlock) {
+unsigned int residentBlocks(Kernel* kernel, unsigned int all, int block = kQueryBlock,
+                            std::size_t dynamic_smem = 0) {
   static std::map<const void*, int> per_sm;
   const void* key = reinterpret_cast<const void*>(kernel);
   auto it = per_sm.find(key);
   if (it == per_sm.end()) {
     int b = 0;
-    CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, block, 0));
+    CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&b, kernel, block, dynamic_smem));
     it = per_sm.emplace(key, std::max(b, 1)).first;
   }
   return static_cast<unsigned int>(std::min<unsigned long long>(
@@ -3373,13 +3392,15 @@ unsigned int residentBlocks(Kernel* kernel, unsigned int all, int block = kQuery
 }
 
 template <class S, class Kernel>
-WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long tasks) {
+WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long tasks,
+                              bool spans) {
   const bool dynamic = kWarpTaskLoop<S> && dynamicWarpTasks();
   ctx.profile.warp_tasks = dynamic;
   // (At least one block: a round may have no tasks.)
   const unsigned int all = std::max(1u, blocksFor(32 * tasks, kQueryBlock));
   if (!dynamic) return {all, nullptr};
-  return {residentBlocks(kernel, all), ctx.warpTasks()};
+  // (The slots for one lane per query: the most dynamic shared memory a launch asks for.)
+  return {residentBlocks(kernel, all, kQueryBlock, warpSlotBytes(spans, 0)), ctx.warpTasks()};
 }
 
 /// Whether a self query that takes its same-level pairs from the cells runs the cells' kernel and
@@ -3626,10 +3647,11 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
           (na + per_warp - 1) / per_warp + (nb + per_warp - 1) / per_warp;
       const auto kernel = spans ? interCandidatesWarpKernel<S, 8, true>
                                 : interCandidatesWarpKernel<S, 8, false>;
-      const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
-      kernel<<<wl.blocks, kQueryBlock, 0, s>>>(av, bv, va, una, unb, rp.identity, rp.b_to_a,
-                                               eps_coef, eps_tmag, log_p, warpVisit(),
-                                               size_by_level, fixed_cells, round, cand, wl.tasks);
+      const WarpScanLaunch wl =
+          warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round), spans);
+      kernel<<<wl.blocks, kQueryBlock, warpSlotBytes(spans, log_p), s>>>(
+          av, bv, va, una, unb, rp.identity, rp.b_to_a, eps_coef, eps_tmag, log_p, warpVisit(),
+          size_by_level, fixed_cells, round, cand, wl.tasks);
     } else {
       withTile([&](auto g, auto mb) {
         constexpr int G = decltype(g)::value;
@@ -3721,10 +3743,11 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
         const unsigned int log_p = warpLanesLog2(n, M.self_density);
         ctx.profile.warp_lanes = 1 << log_p;
         const unsigned long long warps = (n + (32u >> log_p) - 1) / (32u >> log_p);
-        const WarpScanLaunch wl = warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round));
-        kernel<<<wl.blocks, kQueryBlock, 0, on>>>(mv, un, log_p, warpVisit(), level_skip,
-                                                  size_by_level, by_index, fixed_cells, split,
-                                                  round, cand, wl.tasks);
+        const WarpScanLaunch wl =
+            warpScanLaunch<S>(ctx, kernel, roundTasks(warps, round), spans);
+        kernel<<<wl.blocks, kQueryBlock, warpSlotBytes(spans, log_p), on>>>(
+            mv, un, log_p, warpVisit(), level_skip, size_by_level, by_index, fixed_cells, split,
+            round, cand, wl.tasks);
       } else {
         withTile([&](auto g, auto mb) {
           constexpr int G = decltype(g)::value;
