@@ -992,8 +992,6 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                              PairSink cand, unsigned long long* tasks) {
   __shared__ WarpQuery slots[kSpans ? 1 : kQueryBlock];  // (with spans: warpSlots)
   __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
-  __shared__ std::uint32_t ring_tris[kQueryBlock / 32][64];         // (EntryRing)
-  __shared__ std::uint8_t ring_tags[kQueryBlock / 32][64];
   WarpQuery* q = kSpans ? warpSlots(log_p) : slots + (threadIdx.x & ~31u);
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -1018,7 +1016,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     }
     scanCandidatesWarp<kSpans>(
         M, cInfo(0), q, mine, log_p, max_visit, by_index, fixed_cells,
-        ring_tris[threadIdx.x >> 5], ring_tags[threadIdx.x >> 5],
+        warpRing<kSpans, kQueryBlock / 32>(),
         [&](const WarpQuery& o, std::uint32_t j, double dj) {
           return dj > o.d || (dj == o.d && j > o.id);
         },
@@ -1082,9 +1080,7 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
   __shared__ Aabb<S> row_boxes[kQueryBlock / 32][32];
   __shared__ TriIndices row_tris[kQueryBlock / 32][32];  // (by_index)
   __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
-  __shared__ std::uint32_t ring_tris[kQueryBlock / 32][64];         // (EntryRing)
-  __shared__ std::uint8_t ring_tags[kQueryBlock / 32][64];
-  EntryRing ring{ring_tris[threadIdx.x >> 5], ring_tags[threadIdx.x >> 5], 0u, 0u};
+  EntryRing ring = warpRing<kSpans, kQueryBlock / 32>();
   Aabb<S>* const row_box = row_boxes[threadIdx.x >> 5];
   TriIndices* const row_tri = row_tris[threadIdx.x >> 5];
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
@@ -1204,8 +1200,6 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
                               unsigned long long* tasks) {
   __shared__ WarpQuery slots[kSpans ? 1 : kQueryBlock];  // (with spans: warpSlots)
   __shared__ unsigned long long stage_keys[kQueryBlock / 32][64];  // (cand.staged)
-  __shared__ std::uint32_t ring_tris[kQueryBlock / 32][64];         // (EntryRing)
-  __shared__ std::uint8_t ring_tags[kQueryBlock / 32][64];
   WarpQuery* q = kSpans ? warpSlots(log_p) : slots + (threadIdx.x & ~31u);
   PairStage stage{stage_keys[threadIdx.x >> 5], 0};
   const std::uint32_t lane = threadIdx.x & 31u;
@@ -1248,7 +1242,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     if (a_side)
       scanCandidatesWarp<kSpans>(
           B, target, q, mine, log_p, max_visit, false, fixed_cells,
-          ring_tris[threadIdx.x >> 5], ring_tags[threadIdx.x >> 5],
+          warpRing<kSpans, kQueryBlock / 32>(),
           [](const WarpQuery& o, std::uint32_t, double dj) { return dj >= o.d; },
           [](const WarpQuery& o, std::uint32_t j, const TriIndices&, std::uint32_t& a,
              std::uint32_t& b) {
@@ -1259,7 +1253,7 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
     else
       scanCandidatesWarp<kSpans>(
           A, target, q, mine, log_p, max_visit, false, fixed_cells,
-          ring_tris[threadIdx.x >> 5], ring_tags[threadIdx.x >> 5],
+          warpRing<kSpans, kQueryBlock / 32>(),
           [](const WarpQuery& o, std::uint32_t, double di) { return di > o.d; },
           [](const WarpQuery& o, std::uint32_t i, const TriIndices&, std::uint32_t& a,
              std::uint32_t& b) {

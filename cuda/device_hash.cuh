@@ -656,6 +656,19 @@ struct EntryRing {
 template <bool kSpans>
 constexpr bool kQueueSeen = kSpans;
 
+/// This warp's EntryRing, empty, in its block's shared memory (64 + 64 slots for each of the
+/// block's kWarps warps) where the kernel queues (kQueueSeen<kSpans>), else none.
+template <bool kSpans, int kWarps>
+__device__ __forceinline__ EntryRing warpRing() {
+  if constexpr (kQueueSeen<kSpans>) {
+    __shared__ std::uint32_t tris[kWarps][64];
+    __shared__ std::uint8_t tags[kWarps][64];
+    return {tris[threadIdx.x >> 5], tags[threadIdx.x >> 5], 0u, 0u};
+  } else {
+    return {nullptr, nullptr, 0u, 0u};
+  }
+}
+
 /// EntryRing tag bit: the entry passes the size rule without its diameter (kAboveQueryLevel).
 constexpr std::uint8_t kRingAbove = 0x80u;
 
@@ -708,19 +721,18 @@ __device__ __forceinline__ void popRing(EntryRing& r, unsigned int n, Test&& tes
 /// is tested against. max_visit: 1..kMaxWarpVisit. The query's levels (query.levels) as scanCandidatesGroup's.
 /// `fixed_cells`: take each level's cell range from the query's fixed-point coordinates where the
 /// hash allows (fixedCells; a few shifts against a dozen rounded double operations and their
-/// clamps per level). `ring_tri` and `ring_tag` (64 slots each of the warp's shared memory): the
-/// warp's EntryRing, where kQueueSeen<kSpans> queues the entries that pass the canonical-cell and
-/// span tests and tests them 32 at a time (emit is then called per 32 queued entries, and for
-/// the rest before the return). Every lane of the warp must call, with warp-uniform arguments
+/// clamps per level). `ring`: the warp's EntryRing, empty (warpRing), where kQueueSeen<kSpans>
+/// queues the entries that pass the canonical-cell and span tests and tests them 32 at a time
+/// (emit is then called per 32 queued entries, and for the rest before the return). Every lane of the warp must call, with warp-uniform arguments
 /// except `query`.
 template <bool kSpans, class S, class Accept, class Candidate, class Emit>
 __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const BuildInfo& info,
                                                    WarpQuery* q,
                                                    const WarpQuery& query, unsigned int log_p,
                                                    std::uint32_t max_visit, bool load_tri,
-                                                   bool fixed_cells, std::uint32_t* ring_tri,
-                                                   std::uint8_t* ring_tag, Accept&& accept,
-                                                   Candidate&& candidate, Emit&& emit) {
+                                                   bool fixed_cells, EntryRing ring,
+                                                   Accept&& accept, Candidate&& candidate,
+                                                   Emit&& emit) {
   constexpr unsigned int kFull = 0xFFFFFFFFu;
   const unsigned int lane = threadIdx.x & 31u;
   const unsigned int P = 1u << log_p;
@@ -746,7 +758,6 @@ __device__ __forceinline__ void scanCandidatesWarp(const HashView<S>& h, const B
   if (mine.live) startLevel<kSpans>(c, mine, info, fixed, 0);
   // A seen entry's last tests (have: the lane holds one; j, tag: its triangle and EntryRing
   // tag): the size rule, the box and candidate(); then emit, in every lane.
-  EntryRing ring{ring_tri, ring_tag, 0u, 0u};
   const auto test = [&](bool have, std::uint32_t j, std::uint8_t tag) {
     bool hit = false;
     std::uint32_t pa = 0, pb = 0;
