@@ -3385,6 +3385,15 @@ unsigned int residentBlocks(Kernel* kernel, unsigned int all, int block = kQuery
       all, static_cast<unsigned long long>(it->second) * g_num_sms));
 }
 
+/// The grid of an exact kernel (interExactKernel, selfExactKernel: grid-stride over the
+/// device-side count of the pairs the filter left): the blocks the device holds at once, at most
+/// 16 per SM. More only queue behind them; with the short sums of the exact orientations in
+/// registers (exact::orient3dSignShort: 192-216 per thread) the device holds 2 per SM.
+template <class Kernel>
+unsigned int exactBlocks(Kernel* kernel) {
+  return residentBlocks(kernel, static_cast<unsigned int>(16 * g_num_sms));
+}
+
 template <class S, class Kernel>
 WarpScanLaunch warpScanLaunch(Context& ctx, Kernel* kernel, unsigned long long tasks,
                               bool spans) {
@@ -3615,7 +3624,6 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const double eps_tmag =
       std::fabs(rp.a_to_b.t.x) + std::fabs(rp.a_to_b.t.y) + std::fabs(rp.a_to_b.t.z);
   const auto una = static_cast<std::uint32_t>(na), unb = static_cast<std::uint32_t>(nb);
-  const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
   const bool decides = filter && filterDecides();
   ctx.profile.filter_decides = decides;
@@ -3668,7 +3676,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     ctx.markRound(round.serial, 2);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
-      interExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
+      interExactKernel<S, K><<<exactBlocks(interExactKernel<S, K>), kQueryBlock, 0, s>>>(
           in.pairs, in.count, in.capacity, va, av.t, bv.v, bv.t, out);
     });
     return filter;
@@ -3692,7 +3700,6 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   ctx.record(1);
   const cudaStream_t s = ctx.stream;
   const auto un = static_cast<std::uint32_t>(n);
-  const unsigned int exact_blocks = static_cast<unsigned int>(16 * g_num_sms);
   const bool filter = usePlaneFilter(options);
   const bool decides = filter && filterDecides();
   ctx.profile.filter_decides = decides;
@@ -3774,7 +3781,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     ctx.markRound(round.serial, 2);
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
-      selfExactKernel<S, K><<<exact_blocks, kQueryBlock, 0, s>>>(
+      selfExactKernel<S, K><<<exactBlocks(selfExactKernel<S, K>), kQueryBlock, 0, s>>>(
           in.pairs, in.count, in.capacity, mv.v, mv.t, split, bitsFor(n), out);
     });
     return filter;

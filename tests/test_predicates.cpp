@@ -2,8 +2,10 @@
 #include <gmpxx.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <random>
 
 #include "kdet_fcl/detail/exact_predicates.h"
@@ -17,6 +19,9 @@ using kdet_fcl::detail::orient3dSign;
 using kdet_fcl::detail::orientPlane;
 using kdet_fcl::detail::exact::orient2dSignExact;
 using kdet_fcl::detail::exact::orient3dSignExact;
+using kdet_fcl::detail::exact::orient3dSignShort;
+using kdet_fcl::detail::exact::kSumUndecided;
+using kdet_fcl::detail::exact::sumSign;
 using V = Vec3<double>;
 
 /// Exact rational from a double (mpq_set_d is exact).
@@ -58,6 +63,9 @@ void checkCase(const V& a, const V& b, const V& c, const V& d, Tally* t3 = nullp
   if (t3) t3->add(r3);
   ASSERT_EQ(orient3dSign(a, b, c, d), r3) << "a=" << a.x << "," << a.y << "," << a.z;
   ASSERT_EQ(orient3dSignExact(a, b, c, d), r3);
+  // The short sums, where they decide.
+  const int s3 = orient3dSignShort(a, b, c, d);
+  if (s3 != kSumUndecided) ASSERT_EQ(s3, r3);
   // The filter alone (the GPU plane filter's test) may abstain (0) but never proves a wrong sign.
   const int f3 = orient3dFilterSign(a, b, c, d);
   if (f3 != 0) ASSERT_EQ(f3, r3);
@@ -413,6 +421,134 @@ TEST(Predicates, FilterProvesFarSignsAndAbstainsNearThePlane) {
   EXPECT_GT(abstained, 1500);
   EXPECT_GT(proven_plane, 1900);
   EXPECT_GT(abstained_plane, 1500);
+}
+
+/// Whether every coordinate difference from a is exact in double (orient3dSignShort's first form).
+bool exactDifferences(const V& a, const V& b, const V& c, const V& d) {
+  for (const V* p : {&b, &c, &d})
+    for (int k = 0; k < 3; ++k)
+      if (Q((*p)[k] - a[k]) != Q((*p)[k]) - Q(a[k])) return false;
+  return true;
+}
+
+bool floatPoint(const V& p) {
+  for (int k = 0; k < 3; ++k)
+    if (double(float(p[k])) != p[k]) return false;
+  return true;
+}
+
+/// orient3dSignShort's two forms on near-coplanar points: the sign it proves is the referee's,
+/// exact zeros included, and it proves them all (checkCase also checks every other predicate).
+/// First form: coordinates on a grid of 2^-30 (every difference exact). Second form: floats on the
+/// plane z = x + y whose magnitudes differ by up to 2^60, so that differences are not exact in
+/// double.
+/// Points of neither kind (doubles with inexact differences) are left to the expansion.
+TEST(Predicates, ShortSumsDecideNearCoplanarPointsOfBothForms) {
+  std::mt19937_64 rng(2026);
+  std::uniform_int_distribution<int> K(-4000, 4000), S(-2, 2), E(-40, 20), O(0, 3);
+  std::uniform_int_distribution<int> M(-(1 << 22) + 1, (1 << 22) - 1);
+  Tally grid, floats;
+  int grid_cases = 0, float_cases = 0, inexact_float_cases = 0;
+  for (int it = 0; it < 3000; ++it) {
+    // First form: a, b, c on the grid of 2^-10, d = a + s (b - a) + t (c - a) exactly, then one
+    // coordinate of d moved by j 2^-30 (j = 0: exactly coplanar); offset by 0 or 2^20.
+    const double off = (it & 1) ? 0x1p20 : 0.0;
+    auto gp = [&] { return V{off + K(rng) * 0x1p-10, off + K(rng) * 0x1p-10, K(rng) * 0x1p-10}; };
+    const V a = gp(), b = gp(), c = gp();
+    const int s = S(rng), t = S(rng);
+    V d = a + (b - a) * double(s) + (c - a) * double(t);
+    d.z += double(O(rng) - 1) * 0x1p-30;
+    ASSERT_TRUE(exactDifferences(a, b, c, d));
+    const int r = refOrient3d(a, b, c, d);
+    grid.add(r);
+    ASSERT_EQ(orient3dSignShort(a, b, c, d), r) << "grid case " << it;
+    checkCase(a, b, c, d);
+    if (HasFatalFailure()) return;
+    ++grid_cases;
+    // Second form: floats (x, y, x + y) on the plane z = x + y through the origin, each point at
+    // its own scale 2^-44 to 2^16 (exactly coplanar; x, y of 23 significant bits, so that x + y is
+    // a float and the products need two doubles), then one coordinate moved by one float ulp.
+    auto fp = [&] {
+      const int e = E(rng) - 4, mx = M(rng), my = M(rng);
+      return V{double(std::ldexp(float(mx), e)), double(std::ldexp(float(my), e)),
+               double(std::ldexp(float(mx + my), e))};
+    };
+    V f[4] = {fp(), fp(), fp(), fp()};
+    const int move = O(rng);
+    if (move < 3) {
+      double& x = f[3][move];
+      x = double(std::nextafter(float(x), (it & 2) ? INFINITY : -INFINITY));
+    }
+    for (const V& p : f) ASSERT_TRUE(floatPoint(p));
+    const int rf = refOrient3d(f[0], f[1], f[2], f[3]);
+    floats.add(rf);
+    ASSERT_EQ(orient3dSignShort(f[0], f[1], f[2], f[3]), rf) << "float case " << it;
+    checkCase(f[0], f[1], f[2], f[3]);
+    if (HasFatalFailure()) return;
+    ++float_cases;
+    inexact_float_cases += !exactDifferences(f[0], f[1], f[2], f[3]);
+  }
+  EXPECT_GT(grid.zero, grid_cases / 5);
+  EXPECT_GT(grid.pos + grid.neg, grid_cases / 5);
+  EXPECT_GT(floats.zero, float_cases / 5);
+  EXPECT_GT(floats.pos + floats.neg, float_cases / 5);
+  EXPECT_GT(inexact_float_cases, float_cases / 5);  // the second form really ran
+  // Neither form: 1 + 2^-40 against 1e-30 has no exact difference and is no float.
+  const V a{1e-30, 0, 0}, b{1 + 0x1p-40, 1, 0}, c{0, 1e-30, 1}, d{1, 1, 1};
+  EXPECT_FALSE(exactDifferences(a, b, c, d));
+  EXPECT_EQ(orient3dSignShort(a, b, c, d), kSumUndecided);
+  checkCase(a, b, c, d);
+}
+
+/// The exact sum of doubles in rationals.
+int refSumSign(const double* t, int n) {
+  mpq_class sum = 0;
+  for (int i = 0; i < n; ++i) sum += Q(t[i]);
+  return refSign(sum);
+}
+
+/// sumSign: where it proves a sign, that of the exact sum; what one pass leaves, a second
+/// decides; non-finite terms and overflow leave it undecided.
+TEST(Predicates, SumSignProvesTheExactSumsSignOrAbstains) {
+  std::mt19937_64 rng(99);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::uniform_int_distribution<int> E(-60, 60);
+  Tally tally;
+  int decided = 0;
+  for (int it = 0; it < 4000; ++it) {
+    // Eleven random terms, their negations and two residues far below them (every third case
+    // opposite), in a shuffled order: sums that cancel to zero or to a tiny value.
+    double t[24];
+    for (int i = 0; i < 11; ++i) t[i] = std::ldexp(U(rng), E(rng));
+    for (int i = 0; i < 11; ++i) t[11 + i] = -t[i];
+    t[22] = std::ldexp(U(rng), E(rng) - 60);
+    t[23] = it % 3 == 0 ? -t[22] : std::ldexp(U(rng), E(rng) - 60);
+    std::shuffle(std::begin(t), std::end(t), rng);
+    const int r = refSumSign(t, 24);
+    tally.add(r);
+    double w[24];
+    std::copy(std::begin(t), std::end(t), w);
+    const int s = sumSign<24, 6>(w);
+    if (s != kSumUndecided) {
+      ++decided;
+      ASSERT_EQ(s, r) << "case " << it;
+    }
+    ASSERT_EQ(refSumSign(w, 24), r) << "the passes changed the exact sum";
+  }
+  EXPECT_GT(tally.zero, 1000);
+  EXPECT_GT(tally.pos + tally.neg, 2000);
+  EXPECT_GT(decided, 3900);
+  // One pass leaves {2^-60, 0, 0} (sum 2^-60 under a zero top), a second proves it.
+  double one[3] = {1, 0x1p-60, -1};
+  EXPECT_EQ((sumSign<3, 1>(one)), kSumUndecided);
+  double two[3] = {1, 0x1p-60, -1};
+  EXPECT_EQ((sumSign<3, 2>(two)), 1);
+  double zero[4] = {0x1p80, -3, 3, -0x1p80};
+  EXPECT_EQ((sumSign<4, 2>(zero)), 0);
+  double nan[3] = {1, NAN, 2};
+  EXPECT_EQ((sumSign<3, 4>(nan)), kSumUndecided);
+  double big[2] = {1.7e308, 1.7e308};
+  EXPECT_EQ((sumSign<2, 4>(big)), kSumUndecided);
 }
 
 }  // namespace

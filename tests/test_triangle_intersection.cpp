@@ -596,4 +596,58 @@ TEST(TriangleIntersection, FilterVerdictDecidesGenericPairsAndAbstainsOnSharedVe
   EXPECT_GT(g_verdicts.undecided, 0);
 }
 
+/// Edges that cross in an axis-aligned plane, as where a folded cloth lies over itself on the same
+/// grid rows: each triangle has an edge in the plane y = 0 and its third vertex off it, on either
+/// side, with small integer coordinates (many exact touchings). transversalFilterVerdict cannot
+/// prove such an orientation, but knows it is exactly 0 (sameCoordinate): the filters decide these
+/// pairs, and each decided verdict is the exact test's and the SAT referee's.
+TEST(TriangleIntersection, FilterVerdictDecidesEdgesCrossingInAnAxisPlane) {
+  namespace ti = kdet_fcl::detail::tri_isect;
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> I(-3, 3), Y(1, 2), B(0, 1);
+  int cases = 0, hits = 0, by_zero[2] = {0, 0}, by_zero_hits = 0;
+  for (int it = 0; it < 20000; ++it) {
+    Tri T[2];
+    for (Tri& t : T) {
+      t.v[0] = {double(I(rng)), 0, double(I(rng))};
+      t.v[1] = {double(I(rng)), 0, double(I(rng))};
+      t.v[2] = {double(I(rng)), double(B(rng) ? Y(rng) : -Y(rng)), double(I(rng))};
+    }
+    bool degenerate = false;
+    for (const Tri& t : T)
+      degenerate |= isZero(crossQ(sub(toQ(t.v[1]), toQ(t.v[0])), sub(toQ(t.v[2]), toQ(t.v[0]))));
+    if (degenerate) continue;
+    const bool ref = satReferee(T[0], T[1]);
+    ASSERT_EQ(test(T[0], T[1]), ref) << "case " << it;
+    ASSERT_EQ(test(T[1], T[0]), ref) << "case " << it;
+    ++cases;
+    hits += ref;
+    // Decided where the filter alone proved no sign of the last step: by an exact zero.
+    int sp[3], sq[3];
+    FilterVerdict v;
+    const V* p = T[0].v;
+    const V* q = T[1].v;
+    if (!kdet_fcl::detail::planeFilterSigns(p[0], p[1], p[2], q[0], q[1], q[2], sp, sq, v))
+      continue;
+    V a, b, c, d, e, f;
+    ti::transversalVertices(sp, sq, p[0], p[1], p[2], q[0], q[1], q[2], a, b, c, d, e, f);
+    const int o1 = kdet_fcl::detail::orient3dFilterSign(b, d, a, e);
+    const int o2 = kdet_fcl::detail::orient3dFilterSign(a, d, c, f);
+    const bool zero = o1 == 0 || (o1 < 0 && o2 == 0);
+    v = trianglesFilterVerdict(p[0], p[1], p[2], q[0], q[1], q[2]);
+    if (zero && v != FilterVerdict::Undecided) {
+      ++by_zero[o1 == 0 ? 0 : 1];
+      by_zero_hits += v == FilterVerdict::Intersect;
+      ASSERT_EQ(v == FilterVerdict::Intersect, ref) << "case " << it;
+    }
+  }
+  EXPECT_GT(cases, 15000);
+  EXPECT_GT(hits, cases / 10);
+  // The pairs the exact zeros decide, by the first orientation and by the second (touching: all
+  // intersect here).
+  EXPECT_GT(by_zero[0], 100);
+  EXPECT_GT(by_zero[1], 100);
+  EXPECT_EQ(by_zero_hits, by_zero[0] + by_zero[1]);
+}
+
 }  // namespace

@@ -8,7 +8,9 @@
 /// farther from zero than the bound, its sign is certainly right and is returned. Otherwise the
 /// determinant is recomputed exactly as a floating-point expansion (a sum of non-overlapping
 /// doubles, in the spirit of Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast
-/// Robust Geometric Predicates", 1997) and the sign of that expansion is returned.
+/// Robust Geometric Predicates", 1997) and the sign of that expansion is returned. For orient3d
+/// a shorter exact evaluation comes first (orient3dSignShort: a fixed array of products split
+/// exactly, summed by error-free passes); the expansion decides what it leaves.
 ///
 /// Validity range (where the returned sign is the exact sign of the determinant of the given
 /// doubles): every coordinate is either 0 or of magnitude in [2^-247, 2^330] (about [4.4e-75,
@@ -224,6 +226,127 @@ KDET_FCL_HD_NOINLINE int orient3dSignExact(const Vec3<double>& a, const Vec3<dou
   return acc.sign();
 }
 
+/// sumSign's answer where its passes did not prove the sign.
+constexpr int kSumUndecided = 2;
+
+/// The exact sign of t[0] + ... + t[N-1] (doubles in any order, overlapping or not) where at most
+/// kPasses error-free passes prove it, else kSumUndecided; t is overwritten by terms of the same
+/// exact sum. A pass (VecSum of Ogita, Rump and Oishi, "Accurate sum and dot product", 2005) runs
+/// TwoSum up the array: t[i] becomes the rounded sum of t[i] and t[i-1], t[i-1] its rounding
+/// error. The exact sum never changes, and t[N-1] tends to it. The sign is proven when the rest
+/// are all zero (the sum is t[N-1], zero included), or when |t[N-1]| exceeds twice the rest's
+/// magnitudes summed in floating point. That computed sum of N-1 non-negative terms is at least
+/// (1 - (N-2)u) times the exact one, so twice it bounds the rest for any N below 2^50. Fixed-size
+/// and unrolled, so that on the device the terms stay in registers. A term that overflows, or a
+/// non-finite one, leaves the sign undecided.
+template <int N, int kPasses>
+KDET_HD_INLINE int sumSign(double (&t)[N]) {
+  for (int pass = 0; pass < kPasses; ++pass) {
+    KDET_UNROLL
+    for (int i = 1; i < N; ++i) twoSum(t[i], t[i - 1], t[i], t[i - 1]);
+    double rest = 0;
+    KDET_UNROLL
+    for (int i = 0; i < N - 1; ++i) rest += absd(t[i]);
+    const double top = t[N - 1];
+    if (rest == 0) return top > 0 ? 1 : (top < 0 ? -1 : 0);
+    if (absd(top) > 2 * rest) return top > 0 ? 1 : -1;
+  }
+  return kSumUndecided;
+}
+
+/// t[at], t[at + 1]: sign * x * y * z split exactly into two doubles, for x, y and z floats (their
+/// product x * y has at most 48 bits, exact in double; TwoProduct splits the rest).
+template <int N>
+KDET_HD_INLINE void floatTripleTerms(double (&t)[N], int at, double x, double y, double z,
+                                     double sign) {
+  double h, l;
+  twoProduct(x * y, z, h, l);
+  t[at] = sign * l;
+  t[at + 1] = sign * h;
+}
+
+/// t[at .. at + 3]: sign * x * y * z split exactly into four doubles (y * z = p + e, then x * p
+/// and x * e each by TwoProduct).
+template <int N>
+KDET_HD_INLINE void tripleTerms(double (&t)[N], int at, double x, double y, double z,
+                                double sign) {
+  double p, e, h1, l1, h2, l2;
+  twoProduct(y, z, p, e);
+  twoProduct(x, p, h1, l1);
+  twoProduct(x, e, h2, l2);
+  t[at] = sign * l2;
+  t[at + 1] = sign * l1;
+  t[at + 2] = sign * h2;
+  t[at + 3] = sign * h1;
+}
+
+/// Whether the double x is a float's value (finite; the range test first, as converting a
+/// double beyond float's range is undefined).
+KDET_HD_INLINE bool isFloatValue(double x) {
+  return absd(x) <= 3.4028234663852886e38 && static_cast<double>(static_cast<float>(x)) == x;
+}
+
+/// The exact sign of det[b-a; c-a; d-a] by short sums of exact products where they prove it, else
+/// kSumUndecided (orient3dSignExact decides then). Two forms:
+/// - every coordinate difference exact in double (no TwoDiff tail; always so for floats whose
+///   exponents differ by less than 29): the determinant's six triple products of the differences,
+///   each split exactly into four doubles (tripleTerms), summed by sumSign: 24 terms;
+/// - else, every coordinate a float: the same determinant as the 4x4 determinant of the points
+///   with a column of ones, det3(b, c, d) - det3(a, c, d) + det3(a, b, d) - det3(a, b, c) for
+///   det3(p, q, r) = p . (q x r), with no difference taken: 24 triple products of floats, each two
+///   doubles (floatTripleTerms): 48 terms.
+/// On the device the expansion (a 192-component array in local memory, grown one term at a time
+/// through long dependent chains) made a few pairs' exact tests the exact kernel's whole time;
+/// these sums stay in registers. Out of line on the device, as the expansion is.
+KDET_FCL_HD_NOINLINE int orient3dSignShort(const Vec3<double>& a, const Vec3<double>& b,
+                                           const Vec3<double>& c, const Vec3<double>& d) {
+  double ux, uy, uz, vx, vy, vz, wx, wy, wz, r[9];
+  twoDiff(b.x, a.x, ux, r[0]);
+  twoDiff(b.y, a.y, uy, r[1]);
+  twoDiff(b.z, a.z, uz, r[2]);
+  twoDiff(c.x, a.x, vx, r[3]);
+  twoDiff(c.y, a.y, vy, r[4]);
+  twoDiff(c.z, a.z, vz, r[5]);
+  twoDiff(d.x, a.x, wx, r[6]);
+  twoDiff(d.y, a.y, wy, r[7]);
+  twoDiff(d.z, a.z, wz, r[8]);
+  bool exact_differences = true;
+  KDET_UNROLL
+  for (int i = 0; i < 9; ++i) exact_differences = exact_differences && r[i] == 0;
+  if (exact_differences) {
+    double t[24];
+    tripleTerms(t, 0, ux, vy, wz, 1);
+    tripleTerms(t, 4, ux, vz, wy, -1);
+    tripleTerms(t, 8, uy, vz, wx, 1);
+    tripleTerms(t, 12, uy, vx, wz, -1);
+    tripleTerms(t, 16, uz, vx, wy, 1);
+    tripleTerms(t, 20, uz, vy, wx, -1);
+    return sumSign<24, 3>(t);
+  }
+  const Vec3<double>* const p[4] = {&a, &b, &c, &d};
+  bool floats = true;
+  KDET_UNROLL
+  for (int i = 0; i < 4; ++i)
+    floats = floats && isFloatValue(p[i]->x) && isFloatValue(p[i]->y) && isFloatValue(p[i]->z);
+  if (!floats) return kSumUndecided;
+  double t[48];
+  // det3(p, q, r) with the given sign, 12 terms from t[at].
+  const auto det3 = [&t](int at, const Vec3<double>& P, const Vec3<double>& Q,
+                         const Vec3<double>& R, double sign) {
+    floatTripleTerms(t, at, P.x, Q.y, R.z, sign);
+    floatTripleTerms(t, at + 2, P.x, Q.z, R.y, -sign);
+    floatTripleTerms(t, at + 4, P.y, Q.z, R.x, sign);
+    floatTripleTerms(t, at + 6, P.y, Q.x, R.z, -sign);
+    floatTripleTerms(t, at + 8, P.z, Q.x, R.y, sign);
+    floatTripleTerms(t, at + 10, P.z, Q.y, R.x, -sign);
+  };
+  det3(0, b, c, d, 1);
+  det3(12, a, c, d, -1);
+  det3(24, a, b, d, 1);
+  det3(36, a, b, c, -1);
+  return sumSign<48, 4>(t);
+}
+
 }  // namespace exact
 
 /// The exact sign (-1, 0, +1) of (bx-ax)*(cy-ay) - (by-ay)*(cx-ax): +1 when a, b, c turn
@@ -332,10 +455,13 @@ KDET_HD_INLINE bool sameCoordinate(const Vec3<double>& a, const Vec3<double>& b,
 }
 
 /// The exact sign of det[b-a; c-a; d-a] where a filter could not prove it: 0 for four points
-/// equal in one coordinate, else by the expansion.
+/// equal in one coordinate, else by the short sums (exact::orient3dSignShort) or, where they leave
+/// it, the expansion.
 KDET_HD_INLINE int orient3dSignUnfiltered(const Vec3<double>& a, const Vec3<double>& b,
                                           const Vec3<double>& c, const Vec3<double>& d) {
-  return sameCoordinate(a, b, c, d) ? 0 : exact::orient3dSignExact(a, b, c, d);
+  if (sameCoordinate(a, b, c, d)) return 0;
+  const int s = exact::orient3dSignShort(a, b, c, d);
+  return s != exact::kSumUndecided ? s : exact::orient3dSignExact(a, b, c, d);
 }
 
 /// The exact sign (-1, 0, +1) of det[b-a; c-a; d-a] (rows) = dot(cross(b-a, c-a), d-a): positive

@@ -11,3 +11,11 @@
 #define KDET_HD
 #define KDET_HD_INLINE inline
 #endif
+
+/// Before a loop of a fixed trip count: nvcc unrolls it completely, so that an array indexed by
+/// its counter stays in registers instead of local memory. Plain C++ compilers see nothing.
+#if defined(__CUDACC__)
+#define KDET_UNROLL _Pragma("unroll")
+#else
+#define KDET_UNROLL
+#endif
