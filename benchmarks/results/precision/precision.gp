@@ -1,11 +1,11 @@
 # gnuplot precision.gp (in this folder) -> precision.png
 set terminal pngcairo size 1400,650 noenhanced font ',10'
 set output 'precision.png'
-set multiplot layout 1,2 title "kdet_fcl predicate modes: time vs errors, one point per scene (CPU: Intel(R) Xeon(R) Processor; GPU: skipped (built without CUDA))"
+set multiplot layout 1,2 title "kdet_fcl predicate modes: time vs errors, one point per scene (CPU: AMD EPYC; GPU: skipped (built without CUDA))"
 set logscale x
 set logscale y
 set grid
-set xrange [0.1283:2.035]
+set xrange [0.2497:2.113]
 set yrange [0.7:2.38e+05]
 set xtics (0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 1.5, 2, 3, 5, 10, 20, 50, 100)
 set xlabel 'time per query / time of Predicate::Exact (same scene, mesh precision, backend)'
