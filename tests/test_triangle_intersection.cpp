@@ -136,6 +136,12 @@ bool floatExact(const Tri& T) {
 
 Vec3<float> toF(const V& v) { return {float(v.x), float(v.y), float(v.z)}; }
 
+/// Whether T has no area (collinear or repeated vertices), in exact rationals: the SAT referee
+/// takes proper triangles only.
+bool degenerateTri(const Tri& T) {
+  return isZero(crossQ(sub(toQ(T.v[1]), toQ(T.v[0])), sub(toQ(T.v[2]), toQ(T.v[0]))));
+}
+
 /// Checks the expected answer for (P, Q) and (Q, P), under all 6 x 6 vertex orders, and for float
 /// coordinates when they are representable.
 void expectAll(const Tri& P, const Tri& Q, bool expected) {
@@ -343,10 +349,7 @@ TEST(TriangleIntersection, RandomSmallIntegersMatchSatReferee) {
       for (Tri& t : T)
         for (V& v : t.v) v = {double(I(rng)), double(I(rng)), double(I(rng))};
       if (it % 4 == 1) T[1].v[2].z = T[1].v[0].z = T[1].v[1].z = T[0].v[0].z;  // often coplanar
-      bool degenerate = false;
-      for (const Tri& t : T)
-        degenerate |= isZero(crossQ(sub(toQ(t.v[1]), toQ(t.v[0])), sub(toQ(t.v[2]), toQ(t.v[0]))));
-      if (degenerate) continue;
+      if (degenerateTri(T[0]) || degenerateTri(T[1])) continue;
       const bool ref = satReferee(T[0], T[1]);
       ASSERT_EQ(test(T[0], T[1]), ref) << "case " << it;
       ASSERT_EQ(test(T[1], T[0]), ref);
@@ -391,11 +394,7 @@ TEST(TriangleIntersection, RandomCoplanarPairsMatchSatReferee) {
               v = {origin.x + u * E[0].x + w * E[1].x, origin.y + u * E[0].y + w * E[1].y,
                    origin.z + u * E[0].z + w * E[1].z};
             }
-          bool degenerate = false;
-          for (const Tri& t : T)
-            degenerate |=
-                isZero(crossQ(sub(toQ(t.v[1]), toQ(t.v[0])), sub(toQ(t.v[2]), toQ(t.v[0]))));
-          if (degenerate) continue;
+          if (degenerateTri(T[0]) || degenerateTri(T[1])) continue;
           // Coplanar by construction (the referee's arithmetic says so too).
           const QV n = crossQ(sub(toQ(T[0].v[1]), toQ(T[0].v[0])),
                               sub(toQ(T[0].v[2]), toQ(T[0].v[0])));
@@ -456,11 +455,7 @@ TEST(TriangleIntersection, RandomNearTouchingMatchesSatReferee) {
           double& c = Q.v[w < 6 ? 0 : w - 6][w % 3];  // mostly the touching vertex
           if (c != 0) c = std::nextafter(c, (it & 4) ? INFINITY : -INFINITY);
         }
-        bool degenerate = false;
-        for (const Tri* t : {&P, &Q})
-          degenerate |=
-              isZero(crossQ(sub(toQ(t->v[1]), toQ(t->v[0])), sub(toQ(t->v[2]), toQ(t->v[0]))));
-        if (degenerate) continue;
+        if (degenerateTri(P) || degenerateTri(Q)) continue;
         const bool ref = satReferee(P, Q);
         ASSERT_EQ(test(P, Q), ref) << "case " << it << " off " << off << " sc " << sc;
         ASSERT_EQ(test(Q, P), ref);
@@ -512,9 +507,7 @@ TEST(TriangleIntersection, RandomDegenerateMatchesMinkowskiReferee) {
     for (int a = 0; a < 6; a += (it % 10 == 0 ? 1 : 5))
       for (int b = 0; b < 6; b += (it % 10 == 0 ? 1 : 5))
         ASSERT_EQ(test(permuted(T[0], a), permuted(T[1], b)), ref);
-    for (const Tri& t : T)
-      degenerate +=
-          isZero(crossQ(sub(toQ(t.v[1]), toQ(t.v[0])), sub(toQ(t.v[2]), toQ(t.v[0]))));
+    for (const Tri& t : T) degenerate += degenerateTri(t);
     hits += ref;
     ++cases;
   }
@@ -613,10 +606,7 @@ TEST(TriangleIntersection, FilterVerdictDecidesEdgesCrossingInAnAxisPlane) {
       t.v[1] = {double(I(rng)), 0, double(I(rng))};
       t.v[2] = {double(I(rng)), double(B(rng) ? Y(rng) : -Y(rng)), double(I(rng))};
     }
-    bool degenerate = false;
-    for (const Tri& t : T)
-      degenerate |= isZero(crossQ(sub(toQ(t.v[1]), toQ(t.v[0])), sub(toQ(t.v[2]), toQ(t.v[0]))));
-    if (degenerate) continue;
+    if (degenerateTri(T[0]) || degenerateTri(T[1])) continue;
     const bool ref = satReferee(T[0], T[1]);
     ASSERT_EQ(test(T[0], T[1]), ref) << "case " << it;
     ASSERT_EQ(test(T[1], T[0]), ref) << "case " << it;
