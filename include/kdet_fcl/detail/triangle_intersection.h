@@ -559,14 +559,15 @@ KDET_HD_INLINE FilterVerdict transversalFilterVerdict(const int sp[3], const int
 }
 
 /// The exact test's answer where its floating-point filters decide it, without any exact
-/// (expansion) arithmetic: Disjoint when either triangle lies provably strictly on one side of
-/// the other's plane; for two triangles whose six vertex signs are all proven non-zero (proper
+/// (expansion) arithmetic: Disjoint when either triangle lies provably strictly on one side of the
+/// other's plane; for two triangles whose six vertex signs are all proven non-zero (proper
 /// triangles in different planes), the answer of transversalProper's two orientations where both
 /// are proven or exactly zero (sameCoordinate); Undecided otherwise. Every decided answer is
 /// trianglesIntersect()'s: the filters' proven signs and those zeros are the exact signs
-/// (orient3dFilterSign, orient3dSign), and the test takes the same steps on them. Triangles that share a vertex (equal coordinates) always give Undecided, since that
-/// vertex's sign against the other's plane is exactly zero and no filter proves a zero. The GPU
-/// uses it to take most candidate pairs out of its exact kernel (cuda_backend.cu).
+/// (orient3dFilterSign, orient3dSign), and the test takes the same steps on them. Triangles that
+/// share a vertex (equal coordinates) always give Undecided, since that vertex's sign against the
+/// other's plane is exactly zero and no filter proves a zero. The GPU uses it to take most
+/// candidate pairs out of its exact kernel (cuda_backend.cu).
 template <class S>
 KDET_HD_INLINE FilterVerdict trianglesFilterVerdict(const Vec3<S>& p0, const Vec3<S>& p1,
                                                     const Vec3<S>& p2, const Vec3<S>& q0,
