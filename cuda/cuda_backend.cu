@@ -1266,8 +1266,8 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
 }
 
 /// Phase 2: the exact test of each candidate (grid-stride over the device-side count, so the
-/// host needs no read-back between the phases). Every test uses A's vertices mapped into B's
-/// frame (`va`) and B's own vertices, as on the CPU.
+/// host needs no read-back between the phases; items spread over the warps, spreadIndex). Every
+/// test uses A's vertices mapped into B's frame (`va`) and B's own vertices, as on the CPU.
 template <class S, class K>
 __global__ void __launch_bounds__(kQueryBlock)
     interExactKernel(const unsigned long long* __restrict__ cand, const unsigned long long* count,
@@ -1275,8 +1275,8 @@ __global__ void __launch_bounds__(kQueryBlock)
                      const std::uint32_t* __restrict__ ta, const Vec3<S>* __restrict__ vb,
                      const std::uint32_t* __restrict__ tb, PairSink out) {
   const unsigned long long m = *count < capacity ? *count : capacity;
-  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
-       k += gridDim.x * blockDim.x) {
+  const SpreadIndex at = spreadIndex();
+  for (unsigned long long k = at.first; k < m; k += at.stride) {
     const unsigned long long c = cand[k];
     const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
     if (detail::trianglesIntersectWith<K>(va[ta[3 * i]], va[ta[3 * i + 1]], va[ta[3 * i + 2]],
@@ -1313,8 +1313,8 @@ __global__ void __launch_bounds__(kQueryBlock)
                     const std::uint32_t* __restrict__ t, std::uint32_t split, int cat_shift,
                     PairSink out) {
   const unsigned long long m = *count < capacity ? *count : capacity;
-  for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
-       k += gridDim.x * blockDim.x) {
+  const SpreadIndex at = spreadIndex();
+  for (unsigned long long k = at.first; k < m; k += at.stride) {
     const unsigned long long c = cand[k];
     auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
     const bool same = sameMesh(split, i, j);

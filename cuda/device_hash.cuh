@@ -570,6 +570,23 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
   return count;
 }
 
+/// A grid-stride loop's first item for this thread and its stride, with the items spread over the
+/// warps: item k goes to warp k mod W (W: the grid's warps), lane k / W mod 32, so that fewer than
+/// W items take one lane of as many warps, each on its own path, where consecutive items would
+/// fill whole warps whose lanes take different branches one after the other (the exact kernels:
+/// the exact test's branches; ncu, benchmarks/RESULTS-gpu.md: the 90k cloth's self exact kernel
+/// 14.3 -> 9.8 us). Every item k below any count is taken exactly once. Blocks of a multiple of
+/// 32 threads.
+struct SpreadIndex {
+  unsigned long long first, stride;
+};
+__device__ __forceinline__ SpreadIndex spreadIndex() {
+  const unsigned long long warps = static_cast<unsigned long long>(gridDim.x) * (blockDim.x >> 5);
+  const unsigned long long warp =
+      static_cast<unsigned long long>(blockIdx.x) * (blockDim.x >> 5) + (threadIdx.x >> 5);
+  return {warp + warps * (threadIdx.x & 31u), warps * 32};
+}
+
 /// The inclusive prefix sum of the lanes' counts across the warp: lane o then owns the warp's
 /// items [incl_o - count_o, incl_o). Every lane must call.
 __device__ __forceinline__ std::uint32_t warpInclusiveSum(std::uint32_t count) {

@@ -5,7 +5,8 @@
 // scans of 1 to 200,000 triangles with one to eight entries each, and with triangles of no
 // entries (runs longer than a warp among them), where a lane searches past the warp's window.
 // And the warp's queue of seen entries (EntryRing, the warp scans'): what comes off it, 32 at a
-// time and the rest at the end, is what went on, in order, with its tags. Skips without a device.
+// time and the rest at the end, is what went on, in order, with its tags. And the exact kernels'
+// spread of items over the warps (spreadIndex): every item once. Skips without a device.
 
 #include <cuda_runtime.h>
 #include <gtest/gtest.h>
@@ -31,6 +32,19 @@ __global__ void entryTriangleKernel(const std::uint32_t* offsets, std::uint32_t 
   if (e0 >= total) return;
   const std::uint32_t i = kdet_fcl::cuda::warpEntryTriangle(offsets, n, e0, e);
   if (e < total) out[e] = i;
+}
+
+/// Counts, per item below m, the threads of the grid-stride loop of spreadIndex that take it, and
+/// per warp of the grid (hits[m + w]) the items it took below `first_round` (W items or fewer
+/// take one lane of as many warps).
+__global__ void spreadKernel(unsigned long long m, unsigned long long first_round,
+                             unsigned int* hits) {
+  const kdet_fcl::cuda::SpreadIndex at = kdet_fcl::cuda::spreadIndex();
+  const unsigned long long warp = blockIdx.x * (blockDim.x >> 5) + (threadIdx.x >> 5);
+  for (unsigned long long k = at.first; k < m; k += at.stride) {
+    atomicAdd(hits + k, 1u);
+    if (k < first_round) atomicAdd(hits + m + warp, 1u);
+  }
 }
 
 /// One warp per block: `rounds` rounds of 32 lanes; lane l of round r keeps its value
@@ -181,6 +195,34 @@ TEST(CudaWarpSearch, TheRingOfSeenEntriesGivesBackWhatWentOnInOrder) {
   }
   cudaFree(d_keep);
   cudaFree(d_out);
+}
+
+TEST(CudaWarpSearch, SpreadItemsAreEachTakenOnceAndFewItemsOnePerWarp) {
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
+  for (const unsigned int blocks : {1u, 3u, 264u}) {
+    const unsigned long long warps = blocks * 4ull;  // blocks of 128 threads
+    for (const unsigned long long m :
+         {0ull, 1ull, warps - 1, warps, warps + 1, 32 * warps - 1, 32 * warps, 32 * warps + 5,
+          3 * 32 * warps + 77}) {
+      const std::string what = std::to_string(blocks) + " blocks, " + std::to_string(m) + " items";
+      unsigned int* d = nullptr;
+      const std::size_t words = m + warps;
+      ASSERT_EQ(cudaMalloc(&d, words * sizeof(unsigned int)), cudaSuccess);
+      ASSERT_EQ(cudaMemset(d, 0, words * sizeof(unsigned int)), cudaSuccess);
+      spreadKernel<<<blocks, 128>>>(m, warps, d);
+      ASSERT_EQ(cudaDeviceSynchronize(), cudaSuccess) << what;
+      std::vector<unsigned int> hits(words);
+      ASSERT_EQ(cudaMemcpy(hits.data(), d, words * sizeof(unsigned int), cudaMemcpyDeviceToHost),
+                cudaSuccess);
+      cudaFree(d);
+      EXPECT_EQ(std::count(hits.begin(), hits.begin() + m, 1u), static_cast<long>(m)) << what;
+      // The first W items: one per warp, each warp one at most.
+      const unsigned long long few = m < warps ? m : warps;
+      EXPECT_EQ(std::count(hits.begin() + m, hits.end(), 1u), static_cast<long>(few)) << what;
+      EXPECT_EQ(std::count(hits.begin() + m, hits.end(), 0u), static_cast<long>(warps - few))
+          << what;
+    }
+  }
 }
 
 }  // namespace
