@@ -8,7 +8,6 @@
 #include <cuda_runtime.h>
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <cstddef>
 #include <random>
 #include <vector>
@@ -16,6 +15,7 @@
 #include "cuda_device.h"
 #include "kdet_fcl/detail/exact_predicates.h"
 #include "kdet_fcl/detail/triangle_intersection.h"
+#include "near_coplanar_points.h"
 
 namespace {
 
@@ -65,37 +65,11 @@ std::vector<int> runOnDevice(Kernel kernel, const std::vector<T>& in, std::size_
   return out;
 }
 
-/// Near-coplanar points as in test_predicates: on a grid of 2^-30 (exact differences), floats on
-/// the plane z = x + y at scales 2^-44 to 2^16 (differences not exact), and doubles of neither
-/// kind; each exactly coplanar or moved by one step.
-std::vector<V> nearCoplanarPoints(int cases) {
-  std::mt19937_64 rng(2027);
-  std::uniform_int_distribution<int> K(-4000, 4000), S(-2, 2), E(-40, 20), O(0, 3);
-  std::uniform_int_distribution<int> M(-(1 << 22) + 1, (1 << 22) - 1);
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
+/// The points of near_coplanar_points.h's cases, four per case.
+std::vector<V> nearCoplanarPoints(int rounds) {
   std::vector<V> p;
-  for (int it = 0; it < cases; ++it) {
-    const double off = (it & 1) ? 0x1p20 : 0.0;
-    auto gp = [&] { return V{off + K(rng) * 0x1p-10, off + K(rng) * 0x1p-10, K(rng) * 0x1p-10}; };
-    const V a = gp(), b = gp(), c = gp();
-    V d = a + (b - a) * double(S(rng)) + (c - a) * double(S(rng));
-    d.z += double(O(rng) - 1) * 0x1p-30;
-    p.insert(p.end(), {a, b, c, d});
-    V f[4];
-    for (V& q : f) {
-      const int e = E(rng) - 4, mx = M(rng), my = M(rng);
-      q = {double(std::ldexp(float(mx), e)), double(std::ldexp(float(my), e)),
-           double(std::ldexp(float(mx + my), e))};
-    }
-    const int move = O(rng);
-    if (move < 3) f[3][move] = double(std::nextafter(float(f[3][move]), (it & 2) ? INFINITY : -INFINITY));
-    p.insert(p.end(), {f[0], f[1], f[2], f[3]});
-    // Neither form: doubles near a plane, far from the origin, one of them tiny.
-    const V g0{1e-30, U(rng), U(rng)}, g1{1 + 0x1p-40, U(rng), U(rng)}, g2{U(rng), 1e7, U(rng)};
-    V g3 = g0 + (g1 - g0) * 0.25 + (g2 - g0) * 0.5;
-    g3.z = std::nextafter(g3.z, (it & 1) ? INFINITY : -INFINITY);
-    p.insert(p.end(), {g0, g1, g2, g3});
-  }
+  for (const kdet_test::NearCoplanarCase& k : kdet_test::nearCoplanarCases(rounds, 2027))
+    p.insert(p.end(), std::begin(k.p), std::end(k.p));
   return p;
 }
 
@@ -113,7 +87,7 @@ TEST(CudaPredicates, DeviceSignsAreTheHostsOnNearCoplanarPoints) {
     ASSERT_EQ(out[3 * k], host) << "case " << k << ": orient3dSign";
     const int host_short = kd::exact::orient3dSignShort(q[0], q[1], q[2], q[3]);
     ASSERT_EQ(out[3 * k + 1], host_short) << "case " << k << ": the short sums";
-    if (host_short != kd::exact::kSumUndecided) {
+    if (host_short != kd::exact::kSignUnknown) {
       ASSERT_EQ(host_short, host) << "case " << k;
       ++short_decided;
     } else {

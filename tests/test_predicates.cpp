@@ -9,6 +9,7 @@
 #include <random>
 
 #include "kdet_fcl/detail/exact_predicates.h"
+#include "near_coplanar_points.h"
 
 namespace {
 
@@ -19,8 +20,9 @@ using kdet_fcl::detail::orient3dSign;
 using kdet_fcl::detail::orientPlane;
 using kdet_fcl::detail::exact::orient2dSignExact;
 using kdet_fcl::detail::exact::orient3dSignExact;
+using kdet_fcl::detail::exact::isFloatValue;
 using kdet_fcl::detail::exact::orient3dSignShort;
-using kdet_fcl::detail::exact::kSumUndecided;
+using kdet_fcl::detail::exact::kSignUnknown;
 using kdet_fcl::detail::exact::sumSign;
 using V = Vec3<double>;
 
@@ -65,7 +67,7 @@ void checkCase(const V& a, const V& b, const V& c, const V& d, Tally* t3 = nullp
   ASSERT_EQ(orient3dSignExact(a, b, c, d), r3);
   // The short sums, where they decide.
   const int s3 = orient3dSignShort(a, b, c, d);
-  if (s3 != kSumUndecided) ASSERT_EQ(s3, r3);
+  if (s3 != kSignUnknown) ASSERT_EQ(s3, r3);
   // The filter alone (the GPU plane filter's test) may abstain (0) but never proves a wrong sign.
   const int f3 = orient3dFilterSign(a, b, c, d);
   if (f3 != 0) ASSERT_EQ(f3, r3);
@@ -432,61 +434,47 @@ bool exactDifferences(const V& a, const V& b, const V& c, const V& d) {
 }
 
 bool floatPoint(const V& p) {
-  for (int k = 0; k < 3; ++k)
-    if (double(float(p[k])) != p[k]) return false;
-  return true;
+  return isFloatValue(p.x) && isFloatValue(p.y) && isFloatValue(p.z);
 }
 
-/// orient3dSignShort's two forms on near-coplanar points: the sign it proves is the referee's,
-/// exact zeros included, and it proves them all (checkCase also checks every other predicate).
-/// First form: coordinates on a grid of 2^-30 (every difference exact). Second form: floats on the
-/// plane z = x + y whose magnitudes differ by up to 2^60, so that differences are not exact in
-/// double.
-/// Points of neither kind (doubles with inexact differences) are left to the expansion.
+/// orient3dSignShort's two forms on near-coplanar points (near_coplanar_points.h): the sign it
+/// proves is the referee's, exact zeros included, and it proves them all (checkCase also checks
+/// every other predicate). First form: coordinates on a grid of 2^-30 (every difference exact).
+/// Second form: floats on the plane z = x + y whose magnitudes differ by up to 2^60, so that
+/// differences are not exact in double. Points of neither kind (doubles with inexact
+/// differences) are left to the expansion.
 TEST(Predicates, ShortSumsDecideNearCoplanarPointsOfBothForms) {
-  std::mt19937_64 rng(2026);
-  std::uniform_int_distribution<int> K(-4000, 4000), S(-2, 2), E(-40, 20), O(0, 3);
-  std::uniform_int_distribution<int> M(-(1 << 22) + 1, (1 << 22) - 1);
+  using kdet_test::ShortForm;
   Tally grid, floats;
-  int grid_cases = 0, float_cases = 0, inexact_float_cases = 0;
-  for (int it = 0; it < 3000; ++it) {
-    // First form: a, b, c on the grid of 2^-10, d = a + s (b - a) + t (c - a) exactly, then one
-    // coordinate of d moved by j 2^-30 (j = 0: exactly coplanar); offset by 0 or 2^20.
-    const double off = (it & 1) ? 0x1p20 : 0.0;
-    auto gp = [&] { return V{off + K(rng) * 0x1p-10, off + K(rng) * 0x1p-10, K(rng) * 0x1p-10}; };
-    const V a = gp(), b = gp(), c = gp();
-    const int s = S(rng), t = S(rng);
-    V d = a + (b - a) * double(s) + (c - a) * double(t);
-    d.z += double(O(rng) - 1) * 0x1p-30;
-    ASSERT_TRUE(exactDifferences(a, b, c, d));
+  int grid_cases = 0, float_cases = 0, inexact_float_cases = 0, it = 0;
+  for (const kdet_test::NearCoplanarCase& k : kdet_test::nearCoplanarCases(3000, 2026)) {
+    const V& a = k.p[0];
+    const V& b = k.p[1];
+    const V& c = k.p[2];
+    const V& d = k.p[3];
     const int r = refOrient3d(a, b, c, d);
-    grid.add(r);
-    ASSERT_EQ(orient3dSignShort(a, b, c, d), r) << "grid case " << it;
+    switch (k.form) {
+      case ShortForm::ExactDifferences:
+        ASSERT_TRUE(exactDifferences(a, b, c, d));
+        grid.add(r);
+        ASSERT_EQ(orient3dSignShort(a, b, c, d), r) << "grid case " << it;
+        ++grid_cases;
+        break;
+      case ShortForm::Floats:
+        for (const V& p : k.p) ASSERT_TRUE(floatPoint(p));
+        floats.add(r);
+        ASSERT_EQ(orient3dSignShort(a, b, c, d), r) << "float case " << it;
+        ++float_cases;
+        inexact_float_cases += !exactDifferences(a, b, c, d);
+        break;
+      case ShortForm::Neither:
+        ASSERT_FALSE(exactDifferences(a, b, c, d));
+        ASSERT_EQ(orient3dSignShort(a, b, c, d), kSignUnknown) << "case " << it;
+        break;
+    }
     checkCase(a, b, c, d);
     if (HasFatalFailure()) return;
-    ++grid_cases;
-    // Second form: floats (x, y, x + y) on the plane z = x + y through the origin, each point at
-    // its own scale 2^-44 to 2^16 (exactly coplanar; x, y of 23 significant bits, so that x + y is
-    // a float and the products need two doubles), then one coordinate moved by one float ulp.
-    auto fp = [&] {
-      const int e = E(rng) - 4, mx = M(rng), my = M(rng);
-      return V{double(std::ldexp(float(mx), e)), double(std::ldexp(float(my), e)),
-               double(std::ldexp(float(mx + my), e))};
-    };
-    V f[4] = {fp(), fp(), fp(), fp()};
-    const int move = O(rng);
-    if (move < 3) {
-      double& x = f[3][move];
-      x = double(std::nextafter(float(x), (it & 2) ? INFINITY : -INFINITY));
-    }
-    for (const V& p : f) ASSERT_TRUE(floatPoint(p));
-    const int rf = refOrient3d(f[0], f[1], f[2], f[3]);
-    floats.add(rf);
-    ASSERT_EQ(orient3dSignShort(f[0], f[1], f[2], f[3]), rf) << "float case " << it;
-    checkCase(f[0], f[1], f[2], f[3]);
-    if (HasFatalFailure()) return;
-    ++float_cases;
-    inexact_float_cases += !exactDifferences(f[0], f[1], f[2], f[3]);
+    ++it;
   }
   EXPECT_GT(grid.zero, grid_cases / 5);
   EXPECT_GT(grid.pos + grid.neg, grid_cases / 5);
@@ -496,7 +484,7 @@ TEST(Predicates, ShortSumsDecideNearCoplanarPointsOfBothForms) {
   // Neither form: 1 + 2^-40 against 1e-30 has no exact difference and is no float.
   const V a{1e-30, 0, 0}, b{1 + 0x1p-40, 1, 0}, c{0, 1e-30, 1}, d{1, 1, 1};
   EXPECT_FALSE(exactDifferences(a, b, c, d));
-  EXPECT_EQ(orient3dSignShort(a, b, c, d), kSumUndecided);
+  EXPECT_EQ(orient3dSignShort(a, b, c, d), kSignUnknown);
   checkCase(a, b, c, d);
 }
 
@@ -529,7 +517,7 @@ TEST(Predicates, SumSignProvesTheExactSumsSignOrAbstains) {
     double w[24];
     std::copy(std::begin(t), std::end(t), w);
     const int s = sumSign<24, 6>(w);
-    if (s != kSumUndecided) {
+    if (s != kSignUnknown) {
       ++decided;
       ASSERT_EQ(s, r) << "case " << it;
     }
@@ -540,15 +528,15 @@ TEST(Predicates, SumSignProvesTheExactSumsSignOrAbstains) {
   EXPECT_GT(decided, 3900);
   // One pass leaves {2^-60, 0, 0} (sum 2^-60 under a zero top), a second proves it.
   double one[3] = {1, 0x1p-60, -1};
-  EXPECT_EQ((sumSign<3, 1>(one)), kSumUndecided);
+  EXPECT_EQ((sumSign<3, 1>(one)), kSignUnknown);
   double two[3] = {1, 0x1p-60, -1};
   EXPECT_EQ((sumSign<3, 2>(two)), 1);
   double zero[4] = {0x1p80, -3, 3, -0x1p80};
   EXPECT_EQ((sumSign<4, 2>(zero)), 0);
   double nan[3] = {1, NAN, 2};
-  EXPECT_EQ((sumSign<3, 4>(nan)), kSumUndecided);
+  EXPECT_EQ((sumSign<3, 4>(nan)), kSignUnknown);
   double big[2] = {1.7e308, 1.7e308};
-  EXPECT_EQ((sumSign<2, 4>(big)), kSumUndecided);
+  EXPECT_EQ((sumSign<2, 4>(big)), kSignUnknown);
 }
 
 }  // namespace

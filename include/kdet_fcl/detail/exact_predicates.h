@@ -226,11 +226,12 @@ KDET_FCL_HD_NOINLINE int orient3dSignExact(const Vec3<double>& a, const Vec3<dou
   return acc.sign();
 }
 
-/// sumSign's answer where its passes did not prove the sign.
-constexpr int kSumUndecided = 2;
+/// The answer of sumSign and orient3dSignShort where they cannot tell the sign (only the
+/// expansion can).
+constexpr int kSignUnknown = 2;
 
 /// The exact sign of t[0] + ... + t[N-1] (doubles in any order, overlapping or not) where at most
-/// kPasses error-free passes prove it, else kSumUndecided; t is overwritten by terms of the same
+/// kPasses error-free passes prove it, else kSignUnknown; t is overwritten by terms of the same
 /// exact sum. A pass (VecSum of Ogita, Rump and Oishi, "Accurate sum and dot product", 2005) runs
 /// TwoSum up the array: t[i] becomes the rounded sum of t[i] and t[i-1], t[i-1] its rounding
 /// error. The exact sum never changes, and t[N-1] tends to it. The sign is proven when the rest
@@ -251,7 +252,7 @@ KDET_HD_INLINE int sumSign(double (&t)[N]) {
     if (rest == 0) return top > 0 ? 1 : (top < 0 ? -1 : 0);
     if (absd(top) > 2 * rest) return top > 0 ? 1 : -1;
   }
-  return kSumUndecided;
+  return kSignUnknown;
 }
 
 /// t[at], t[at + 1]: sign * x * y * z split exactly into two doubles, for x, y and z floats (their
@@ -287,7 +288,7 @@ KDET_HD_INLINE bool isFloatValue(double x) {
 }
 
 /// The exact sign of det[b-a; c-a; d-a] by short sums of exact products where they prove it, else
-/// kSumUndecided (orient3dSignExact decides then). Two forms:
+/// kSignUnknown (orient3dSignExact decides then). Two forms:
 /// - every coordinate difference exact in double (no TwoDiff tail; always so for floats whose
 ///   exponents differ by less than 29): the determinant's six triple products of the differences,
 ///   each split exactly into four doubles (tripleTerms), summed by sumSign: 24 terms;
@@ -328,7 +329,7 @@ KDET_FCL_HD_NOINLINE int orient3dSignShort(const Vec3<double>& a, const Vec3<dou
   KDET_UNROLL
   for (int i = 0; i < 4; ++i)
     floats = floats && isFloatValue(p[i]->x) && isFloatValue(p[i]->y) && isFloatValue(p[i]->z);
-  if (!floats) return kSumUndecided;
+  if (!floats) return kSignUnknown;
   double t[48];
   // det3(p, q, r) with the given sign, 12 terms from t[at].
   const auto det3 = [&t](int at, const Vec3<double>& P, const Vec3<double>& Q,
@@ -454,6 +455,16 @@ KDET_HD_INLINE bool sameCoordinate(const Vec3<double>& a, const Vec3<double>& b,
          (a.z == b.z && b.z == c.z && c.z == d.z);
 }
 
+/// Whether the sign of det[b-a; c-a; d-a] is known without exact arithmetic, and then that sign
+/// in `s`: proven by orient3dFilterSign, or the exact 0 of four points equal in one coordinate
+/// (sameCoordinate). For callers that act on known signs only (the plane filter's last step,
+/// trianglesFilterVerdict).
+KDET_HD_INLINE bool orient3dKnownSign(const Vec3<double>& a, const Vec3<double>& b,
+                                      const Vec3<double>& c, const Vec3<double>& d, int& s) {
+  s = orient3dFilterSign(a, b, c, d);
+  return s != 0 || sameCoordinate(a, b, c, d);
+}
+
 /// The exact sign of det[b-a; c-a; d-a] where a filter could not prove it: 0 for four points
 /// equal in one coordinate, else by the short sums (exact::orient3dSignShort) or, where they leave
 /// it, the expansion.
@@ -461,7 +472,7 @@ KDET_HD_INLINE int orient3dSignUnfiltered(const Vec3<double>& a, const Vec3<doub
                                           const Vec3<double>& c, const Vec3<double>& d) {
   if (sameCoordinate(a, b, c, d)) return 0;
   const int s = exact::orient3dSignShort(a, b, c, d);
-  return s != exact::kSumUndecided ? s : exact::orient3dSignExact(a, b, c, d);
+  return s != exact::kSignUnknown ? s : exact::orient3dSignExact(a, b, c, d);
 }
 
 /// The exact sign (-1, 0, +1) of det[b-a; c-a; d-a] (rows) = dot(cross(b-a, c-a), d-a): positive

@@ -538,10 +538,10 @@ KDET_HD_INLINE bool planeFilterSigns(const Vec3<S>& p0, const Vec3<S>& p1, const
 
 /// trianglesFilterVerdict's last step, for the signs planeFilterSigns left to it (all six
 /// non-zero): transversalProper's two orientations on transversalOrder's vertices, where both are
-/// proven. An orientation the filter cannot prove is still known where its four points are equal
-/// in one coordinate (sameCoordinate: exactly 0, as orient3dSign finds it): edges that cross in an
-/// axis-aligned plane, as where a folded cloth lies over itself on the same grid rows (most of the
-/// procedural cloths' undecided pairs, benchmarks/RESULTS-gpu.md).
+/// known (orient3dKnownSign: proven, or exactly 0 where the four points are equal in one
+/// coordinate, as orient3dSign finds it): edges that cross in an axis-aligned plane, as where a
+/// folded cloth lies over itself on the same grid rows (most of the procedural cloths' undecided
+/// pairs, benchmarks/RESULTS-gpu.md).
 template <class S>
 KDET_HD_INLINE FilterVerdict transversalFilterVerdict(const int sp[3], const int sq[3],
                                                       const Vec3<S>& p0, const Vec3<S>& p1,
@@ -549,12 +549,12 @@ KDET_HD_INLINE FilterVerdict transversalFilterVerdict(const int sp[3], const int
                                                       const Vec3<S>& q1, const Vec3<S>& q2) {
   Vec3<S> a, b, c, d, e, f;
   tri_isect::transversalVertices(sp, sq, p0, p1, p2, q0, q1, q2, a, b, c, d, e, f);
-  const Vec3<double> A = toDouble(a), D = toDouble(d);
-  const int o1 = orient3dFilterSign(toDouble(b), D, A, toDouble(e));
-  if (o1 == 0 && !sameCoordinate(toDouble(b), D, A, toDouble(e))) return FilterVerdict::Undecided;
+  int o1 = 0, o2 = 0;
+  if (!orient3dKnownSign(toDouble(b), toDouble(d), toDouble(a), toDouble(e), o1))
+    return FilterVerdict::Undecided;
   if (o1 > 0) return FilterVerdict::Disjoint;
-  const int o2 = orient3dFilterSign(A, D, toDouble(c), toDouble(f));
-  if (o2 == 0 && !sameCoordinate(A, D, toDouble(c), toDouble(f))) return FilterVerdict::Undecided;
+  if (!orient3dKnownSign(toDouble(a), toDouble(d), toDouble(c), toDouble(f), o2))
+    return FilterVerdict::Undecided;
   return o2 > 0 ? FilterVerdict::Disjoint : FilterVerdict::Intersect;
 }
 
@@ -562,7 +562,7 @@ KDET_HD_INLINE FilterVerdict transversalFilterVerdict(const int sp[3], const int
 /// (expansion) arithmetic: Disjoint when either triangle lies provably strictly on one side of the
 /// other's plane; for two triangles whose six vertex signs are all proven non-zero (proper
 /// triangles in different planes), the answer of transversalProper's two orientations where both
-/// are proven or exactly zero (sameCoordinate); Undecided otherwise. Every decided answer is
+/// are known (orient3dKnownSign); Undecided otherwise. Every decided answer is
 /// trianglesIntersect()'s: the filters' proven signs and those zeros are the exact signs
 /// (orient3dFilterSign, orient3dSign), and the test takes the same steps on them. Triangles that
 /// share a vertex (equal coordinates) always give Undecided, since that vertex's sign against the
