@@ -43,6 +43,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -1858,6 +1859,11 @@ struct CachedMesh {
   // Of the last self query's candidates, the share that the cells' pairs gave (runQuery's
   // stages).
   double self_cell_share = 0;
+  // runQuery's forecasts: the pairs the last self query of this entry (two meshes hashed as one
+  // included) delivered into a host result, and those of its last inter query with the entry
+  // `inter_partner` as its second mesh (another partner starts without one).
+  std::size_t self_host_pairs = 0, inter_host_pairs = 0;
+  const void* inter_partner = nullptr;
   // `builds` counts the geometries this entry has held (rebuild()): the geometry of the kept
   // self result (detail::KeptSelfResult's rule: a rigid mesh's self query runs on the device
   // twice, then never again; a mesh with new geometry at every self query never keeps one).
@@ -1927,6 +1933,7 @@ struct Context {
   // wait for everything queued on `stream` so far, joinSide() makes `stream` wait for it.
   cudaStream_t side = nullptr;  // (of the least priority, `stream` of the greatest)
   cudaEvent_t fork = nullptr, join = nullptr;
+  cudaEvent_t counted = nullptr;  // a pass's counts are back (runQuery, with a forecast)
   cudaEvent_t ev[4] = {};
   // While profiling, three events per round of a query pass (markRound): before its phase 1
   // (round 0: ev[1]), after its phase 1 and after its plane filter. Created as needed.
@@ -1974,6 +1981,7 @@ struct Context {
     for (cudaEvent_t& e : ev) CUDA_TRY(cudaEventCreate(&e));
     CUDA_TRY(cudaEventCreateWithFlags(&fork, cudaEventDisableTiming));
     CUDA_TRY(cudaEventCreateWithFlags(&join, cudaEventDisableTiming));
+    CUDA_TRY(cudaEventCreateWithFlags(&counted, cudaEventDisableTiming));
     red.reserve(1);
     pair_count.reserve(kPairCountWords);
     host_small.reserve(3 * sizeof(BuildInfo) + (4 + kPairCountWords) * sizeof(unsigned long long));
@@ -2630,6 +2638,14 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upl
   buildOnDevice(ctx, m, nt, async);
 }
 
+/// Whether a re-hash without read-back of `m` stored everything (its BuildInfo `host`, copied
+/// back with the pass's counts): nothing too large for its arrays, keys within the compact sort.
+template <class S>
+bool builtInCaps(const CachedMesh<S>& m, const BuildInfo& host) {
+  return !host.need_sync && host.entries <= m.pending_entry_cap &&
+         host.cells <= m.pending_cell_cap;
+}
+
 /// After a query pass: a mesh re-hashed without read-back (pending) whose BuildInfo, copied to
 /// `host` with the pass's counts, shows that an array was too small or the keys outgrew the
 /// compact sort is rebuilt with read-backs. Returns true when it was (the query must rerun).
@@ -2639,8 +2655,7 @@ bool checkPending(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh,
   if (!m.pending) return false;
   m.pending = false;
   m.info = host;
-  if (!host.need_sync && host.entries <= m.pending_entry_cap && host.cells <= m.pending_cell_cap)
-    return false;
+  if (builtInCaps(m, host)) return false;
   ++ctx.profile.rehash_fallbacks;
   rebuild(ctx, m, mesh, false, false);
   return true;
@@ -2744,6 +2759,31 @@ bool oneTripOn() { return detail::switchKnob("KDET_FCL_CUDA_ONE_TRIP", true); }
 std::size_t oneTripCopyChunks() {
   return static_cast<std::size_t>(
       detail::numberKnob("KDET_FCL_CUDA_ONE_TRIP_COPY", 0, kOneTripMaxChunks, kOneTripMaxChunks));
+}
+
+/// Whether a host query whose last host result (these meshes, this kind: runQuery's forecast)
+/// held at least one read-back chunk of pairs (KDET_FCL_CUDA_DOWNLOAD_CHUNK: 32,768 by default)
+/// takes one trip with its pairs delivered into device memory and read back by DMA, the
+/// read-back sized from that forecast and queued right behind the pass's counts, whatever its
+/// size (forecastPairs): KDET_FCL_CUDA_ONE_TRIP_FORECAST (default on; needs the one trip). The
+/// pairs then cross the bus by DMA instead of as the order kernel's writes into mapped memory
+/// (oneTripCopyChunks; ncu, H100, the cloth ball's 61,530 pairs: that kernel took 39.7 us with
+/// them, 15.8 without), and a large result no longer waits for the counts before its order and
+/// read-back are queued. H100, gpu_bench, three rounds each way (benchmarks/RESULTS-gpu.md):
+/// the two funnel frames (48,538 pairs) 0.279-0.307 -> 0.259-0.273 ms per frame, the two n-body
+/// frames (70,169) 0.560-0.604 -> 0.554-0.557, the cloth ball level to -0.007; the results of a
+/// few thousand pairs took 0.004-0.006 ms more that way (a DMA's and its event's fixed costs
+/// against a kernel's few KB of writes), hence the chunk's floor. A query with more pairs than
+/// the forecast's read-back holds reads them all back after the counts (drained first). Read at
+/// every query.
+bool oneTripForecastOn() { return detail::switchKnob("KDET_FCL_CUDA_ONE_TRIP_FORECAST", true); }
+
+/// The pairs a forecast's read-back covers: the forecast `f` and a sixteenth more, plus 512
+/// (frame-to-frame growth; the extra chunks' transfers are the cost of a larger margin), at most
+/// `most` (what the delivery buffer holds).
+std::size_t forecastPairs(std::size_t f, unsigned long long most) {
+  const unsigned long long want = static_cast<unsigned long long>(f) + f / 16 + 512;
+  return static_cast<std::size_t>(std::min(want, most));
 }
 
 /// The counting order in one cooperative launch (orderPairsKernel), or in its five launches (0):
@@ -2859,11 +2899,14 @@ struct DeviceOut {
 /// its storage, moved into the returned result's pairs), or with `parts` that hold pairs, the
 /// pairs are read back into that storage: by several threads where staging::pooledThreads allows
 /// (enough pairs, and at least half as many there already; staging::downloadInto,
-/// pooledDownload).
+/// pooledDownload). `forecast`: the pairs this query (these meshes, this kind) delivered into a
+/// host result last time (0: none yet), updated here after each host result; with one trip, a
+/// forecast queues the read-back of that many pairs and a margin before the counts come back
+/// (forecastPairs, oneTripForecastOn).
 template <class Launch, class Pending>
 QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bits, int b_bits,
                      std::size_t work, double density, double first_share, bool stages,
-                     const QueryOptions& options, std::uint32_t split = 0,
+                     const QueryOptions& options, std::size_t* forecast, std::uint32_t split = 0,
                      QueryResult* parts = nullptr, DeviceOut* dev = nullptr,
                      std::vector<TrianglePair>* keep = nullptr) {
   const cudaStream_t s = ctx.stream;
@@ -2972,19 +3015,33 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   // back. Not for a host result when the last one took more than kOneTripMaxChunks chunks: the
   // host then enqueues a copy and an event per chunk (a few us each) after the counts, which the
   // order's kernels cover when they are queued after the counts instead.
+  // With a forecast (a host result of this query before, of at least one read-back chunk:
+  // oneTripForecastOn), the one trip instead delivers the pairs into device memory and queues
+  // their read-back by DMA, sized from the forecast, right behind the counts, whatever its size;
+  // the host waits for the counts alone and copies the chunks out of the stage as they arrive.
   const std::size_t chunk_pairs =
       std::min<std::size_t>(staging::downloadChunkElements(sizeof(TrianglePair)), 0x7FFFFFFF);
+  const std::size_t forecast_pairs = dev == nullptr && forecast != nullptr && counting &&
+                                             *forecast >= chunk_pairs && oneTripForecastOn()
+                                         ? *forecast
+                                         : 0;
   const bool one_trip =
       counting && oneTripOn() &&
-      (dev != nullptr || ctx.last_host_pairs <= kOneTripMaxChunks * chunk_pairs);
+      (dev != nullptr || forecast_pairs > 0 ||
+       ctx.last_host_pairs <= kOneTripMaxChunks * chunk_pairs);
   std::uint32_t copy_most = 0;
-  if (one_trip && dev == nullptr) {
+  if (one_trip && dev == nullptr && forecast_pairs == 0) {
     copy_most = static_cast<std::uint32_t>(
         std::min<std::size_t>(oneTripCopyChunks() * chunk_pairs, 0x7FFFFFFF));
     ctx.readback.reserve(std::size_t(copy_most) * sizeof(TrianglePair));
     if (ctx.readback.deviceData() == nullptr) copy_most = 0;  // kernels cannot write there
   }
   OrderSizes trip;  // the last pass's capacities and counters (passFits; one_trip's sizes)
+  // The read-back queued before the counts (forecast_pairs > 0): the first `ahead_pairs` places
+  // of the delivered order, in chunks, into the stage. Drained (reset: the stream synchronised)
+  // before anything may write the stage or the delivery buffer again.
+  std::optional<staging::ChunkEvents> ahead;
+  std::size_t ahead_pairs = 0;
   while (true) {
     ++passes;
     // One trip: the grouped keys' buffer (the survivors') holds every pair the pass can store,
@@ -3038,7 +3095,22 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     CUDA_TRY(cudaMemcpyAsync(ctx.hostCount(), w, kPairCountWords * sizeof(unsigned long long),
                              cudaMemcpyDeviceToHost, s));
     pending.enqueue();  // the BuildInfo of meshes re-hashed without read-back, same sync
-    CUDA_TRY(cudaStreamSynchronize(s));
+    if (one_trip && forecast_pairs > 0) {
+      // The forecast's read-back behind the counts (a pass that must rerun, or whose pairs are
+      // more, drains it below); the host waits for the counts alone.
+      ahead_pairs = forecastPairs(forecast_pairs, cap);
+      ctx.readback.reserve(ahead_pairs * sizeof(TrianglePair));
+      CUDA_TRY(cudaEventRecord(ctx.counted, s));
+      ahead.emplace();
+      CUDA_TRY(staging::downloadChunks(reinterpret_cast<const TrianglePair*>(
+                                           delivery(ctx.pairs.data())),
+                                       ahead_pairs,
+                                       static_cast<TrianglePair*>(ctx.readback.data()), s, *ahead));
+      CUDA_TRY(cudaEventSynchronize(ctx.counted));
+      if (pending.rebuilds() || !passFits(h, trip)) ahead.reset();
+    } else {
+      CUDA_TRY(cudaStreamSynchronize(s));
+    }
     if (pending.check()) continue;  // a re-hash did not fit: rebuilt with read-backs, rerun
     // The most candidates of one round, and of all rounds (one round: its own counters).
     const unsigned long long nc = rounds > 1 ? h[kMaxCands] : h[kCandCount];
@@ -3106,6 +3178,9 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                      (n >= kCountOrderMinPairs || countOrderForced());
   // The one trip copied the pairs into the stage already.
   const bool from_stage = tripped && dev == nullptr && copy_most > 0 && m <= copy_most;
+  // The forecast's read-back holds them all (else it is drained and they come as without it).
+  if (ahead && !(tripped && m <= ahead_pairs)) ahead.reset();
+  staging::ChunkEvents* const ahead_chunks = ahead ? &*ahead : nullptr;
   unsigned long long* in = ctx.pairs.data();  // receives the pairs in TrianglePair layout
   const bool delivers = give > 0 || (kinds && m > 0);
   if (!(counted && delivers)) ctx.profile.order_blocks = 0;  // (as pairs_counted)
@@ -3113,6 +3188,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     ctx.profile.pairs_counted = counted;
     ctx.profile.one_trip = tripped;
     ctx.profile.one_trip_copy = from_stage;
+    ctx.profile.forecast_copy = ahead_chunks != nullptr;
     static_assert(sizeof(TrianglePair) == sizeof(uint2), "TrianglePair must be two 32-bit words");
     // Into the caller's device buffer, or the key buffer the order no longer needs (`in`); the
     // kinds are counted over all m, and their counts come back before the first chunk of a host
@@ -3155,12 +3231,15 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       // into storage the caller keeps, copied by several threads where that pays (a new
       // result's empty vector always goes by the one thread: staging::downloadInto); or, after
       // the one trip's copy, out of the stage that holds them all already.
-      if (!from_stage) ctx.readback.reserve(m * sizeof(TrianglePair));
+      // (The forecast's read-back reserved the stage before its chunks were queued.)
+      if (!from_stage && ahead_chunks == nullptr) ctx.readback.reserve(m * sizeof(TrianglePair));
       auto* const from = reinterpret_cast<const TrianglePair*>(in);
       auto* const stage = static_cast<TrianglePair*>(ctx.readback.data());
       if (parts == nullptr) {
         if (from_stage) res.pairs.assign(stage, stage + m);
-        else CUDA_TRY(staging::downloadInto(from, m, stage, s, ctx.copy_pool, res.pairs));
+        else
+          CUDA_TRY(
+              staging::downloadInto(from, m, stage, s, ctx.copy_pool, res.pairs, ahead_chunks));
       } else {
         // The three runs' ends (the kind counts arrived before the first chunk).
         std::size_t end0 = 0, end1 = 0;
@@ -3215,14 +3294,17 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                        std::memcpy(static_cast<void*>(parts[kind].pairs.data() + off), p,
                                    c * sizeof(TrianglePair));
                      });
-              }));
+              },
+              ahead_chunks));
         } else {
           std::size_t at = 0;  // the next pair's index
-          CUDA_TRY(staging::stagedDownload(from, m, stage, s, [&](const TrianglePair* first,
-                                                                  std::size_t k) {
-            append(at, first, k);
-            at += k;
-          }));
+          CUDA_TRY(staging::stagedDownload(
+              from, m, stage, s,
+              [&](const TrianglePair* first, std::size_t k) {
+                append(at, first, k);
+                at += k;
+              },
+              ahead_chunks));
         }
       }
     }
@@ -3241,7 +3323,10 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
       dev->kinds[1] = ctx.hostKinds()[1];
     }
   }
-  if (dev == nullptr) ctx.last_host_pairs = m;
+  if (dev == nullptr) {
+    ctx.last_host_pairs = m;
+    if (forecast != nullptr) *forecast = m;
+  }
   res.complete = options.max_pairs == 0 || m < options.max_pairs;
   if (ctx.profiling) {
     CUDA_TRY(cudaEventSynchronize(ctx.ev[3]));
@@ -3592,6 +3677,13 @@ struct PendingBuilds {
         again = checkPending(ctx, *m[k], mesh[k], *ctx.hostInfo(1 + k)) || again;
     return again;
   }
+  /// Whether check() will rebuild a mesh (after the infos have come back; changes nothing).
+  bool rebuilds() const {
+    for (int k = 0; k < 2; ++k)
+      if (m[k] != nullptr && m[k]->pending && !builtInCaps(*m[k], *ctx.hostInfo(1 + k)))
+        return true;
+    return false;
+  }
 };
 
 template <class S>
@@ -3683,9 +3775,13 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   };
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
                            {sourceOf(&a), sourceOf(&b)}};
+  if (A.inter_partner != static_cast<const void*>(&B)) {
+    A.inter_partner = &B;
+    A.inter_host_pairs = 0;
+  }
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,
-                             std::max(A.inter_density, B.inter_density), 0.0, false, options, 0,
-                             nullptr, dev, keep);
+                             std::max(A.inter_density, B.inter_density), 0.0, false, options,
+                             &A.inter_host_pairs, 0, nullptr, dev, keep);
   A.inter_density = B.inter_density = double(ctx.profile.candidates) / double(na + nb);
   return res;
 }
@@ -3788,7 +3884,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   };
   PendingBuilds<S> pending{ctx, {&M, nullptr}, {src, MeshSource<S>{}}};
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(n), bitsFor(n), n, M.self_density,
-                             M.self_cell_share, cell_pairs, options, split, parts, dev, keep);
+                             M.self_cell_share, cell_pairs, options, &M.self_host_pairs, split,
+                             parts, dev, keep);
   M.self_density = double(ctx.profile.candidates) / double(n);
   M.self_cell_share = ctx.profile.candidates > 0 ? double(ctx.profile.cell_candidates) /
                                                        double(ctx.profile.candidates)
@@ -3905,6 +4002,7 @@ void readEveryKnob() {
   (void)countOrderAllowed();
   (void)oneTripOn();
   (void)oneTripCopyChunks();
+  (void)oneTripForecastOn();
   (void)fusedOrderBlocks();
   (void)segmentMax();
   (void)roundCandidateLimit(1);

@@ -25,6 +25,11 @@
 // and 0.30 ms by four into a kept one, 1,000,000 pairs 0.90 against 0.38 ms; 61,530 pairs gained
 // nothing (benchmarks/RESULTS-gpu.md, "Pairs into a result kept across frames").
 //
+// Chunks queued ahead: the CUDA backend may queue a download's chunks before it knows how many
+// elements it needs (a forecast from the frame before, right behind the counts on the stream);
+// stagedDownload, pooledDownload and downloadInto then take those chunks (`ahead`, at least the
+// count's) instead of queueing their own.
+//
 // Knobs (environment, read at every call, for tests and comparisons; a value out of range or
 // not a number throws InvalidInputError, kdet_fcl/detail/knobs.h):
 // KDET_FCL_CUDA_UPLOAD_THREADS=n (1..64) forces the number of host threads (1: one thread,
@@ -268,27 +273,41 @@ cudaError_t downloadChunks(const T* src, std::size_t count, T* stage, cudaStream
   return cudaSuccess;
 }
 
+/// The chunk events of a download of `count` elements: `ahead` where the caller enqueued the
+/// transfers before (downloadChunks of at least `count` elements from the same `src` into the
+/// same `stage`: a read-back queued before the count was known, sized from a forecast), else
+/// those of `own`, enqueued now. Returns the first CUDA error, or cudaSuccess.
+template <class T>
+cudaError_t chunksOf(const T* src, std::size_t count, T* stage, cudaStream_t s, ChunkEvents* ahead,
+                     ChunkEvents& own, ChunkEvents*& use) {
+  use = ahead != nullptr ? ahead : &own;
+  return ahead != nullptr ? cudaSuccess : downloadChunks(src, count, stage, s, own);
+}
+
 /// Copies `count` elements from device memory `src` into host memory through the pinned buffer
 /// `stage` (at least `count` elements). What the caller enqueued on stream `s` before (the kernel
 /// that writes `src`) runs first. Every chunk's transfer into the stage is enqueued on `s`, each
-/// followed by an event; then `append(first, n)` is called on the calling thread for each chunk in
-/// order, as soon as its event has fired: the chunk's n elements at `first` (in the stage). A chunk
-/// is a whole number of elements (downloadChunk() bytes rounded down, at least one element).
-/// Returns the first CUDA error, or cudaSuccess; the transfers have run when it returns, also on
-/// an error and when append throws (then its exception propagates). For count 0 no CUDA call is
+/// followed by an event (or was already, `ahead`: chunksOf); then `append(first, n)` is called on
+/// the calling thread for each chunk in order, as soon as its event has fired: the chunk's n
+/// elements at `first` (in the stage). A chunk is a whole number of elements (downloadChunk()
+/// bytes rounded down, at least one element). Returns the first CUDA error, or cudaSuccess; the
+/// transfers have run when it returns (those of `ahead` when its owner drains it), also on an
+/// error and when append throws (then its exception propagates). For count 0 no CUDA call is
 /// made and append is not called.
 template <class T, class Append>
 cudaError_t stagedDownload(const T* src, std::size_t count, T* stage, cudaStream_t s,
-                           Append&& append) {
+                           Append&& append, ChunkEvents* ahead = nullptr) {
   if (count == 0) return cudaSuccess;
-  ChunkEvents events;
-  const cudaError_t enq = downloadChunks(src, count, stage, s, events);
+  ChunkEvents own;
+  ChunkEvents* events = nullptr;
+  const cudaError_t enq = chunksOf(src, count, stage, s, ahead, own, events);
   if (enq != cudaSuccess) return enq;
-  for (std::size_t c = 0; c < events.ev.size(); ++c) {
-    const cudaError_t err = cudaEventSynchronize(events.ev[c]);
+  const std::size_t chunks = (count + events->chunk - 1) / events->chunk;
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const cudaError_t err = cudaEventSynchronize(events->ev[c]);
     if (err != cudaSuccess) return err;
-    const std::size_t off = c * events.chunk;
-    append(static_cast<const T*>(stage + off), std::min(events.chunk, count - off));
+    const std::size_t off = c * events->chunk;
+    append(static_cast<const T*>(stage + off), std::min(events->chunk, count - off));
   }
   return cudaSuccess;
 }
@@ -379,26 +398,29 @@ class CopyPool {
 };
 
 /// stagedDownload into destinations the caller has storage for (a result kept across frames):
-/// every chunk's transfer is enqueued at once; `ready()` runs on the calling thread once the
-/// first chunk has arrived (so that what the stream copied before it, such as counts, is there:
-/// the caller sizes its destinations then; it may throw, and the transfers have run when the
-/// exception leaves); then `threads` threads of `pool` (the calling one included) take the
-/// chunks, each waiting for its chunk's event and calling `place(offset, first, n)`: the chunk's
-/// n elements at `first` (in the stage) are those from element `offset` on. place is called
-/// concurrently for disjoint ranges and must not throw. Returns the first CUDA error, or
-/// cudaSuccess; the transfers have run when it returns. For count 0 no CUDA call is made, and
-/// neither ready nor place is called.
+/// every chunk's transfer is enqueued at once (or was already, `ahead`: chunksOf); `ready()` runs
+/// on the calling thread once the first chunk has arrived (so that what the stream copied before
+/// it, such as counts, is there: the caller sizes its destinations then; it may throw, and the
+/// transfers have run when the exception leaves); then `threads` threads of `pool` (the calling
+/// one included) take the chunks, each waiting for its chunk's event and calling
+/// `place(offset, first, n)`: the chunk's n elements at `first` (in the stage) are those from
+/// element `offset` on. place is called concurrently for disjoint ranges and must not throw.
+/// Returns the first CUDA error, or cudaSuccess; the transfers have run when it returns (those of
+/// `ahead` when its owner drains it). For count 0 no CUDA call is made, and neither ready nor
+/// place is called.
 template <class T, class Ready, class Place>
 cudaError_t pooledDownload(const T* src, std::size_t count, T* stage, cudaStream_t s,
-                           CopyPool& pool, int threads, Ready&& ready, Place&& place) {
+                           CopyPool& pool, int threads, Ready&& ready, Place&& place,
+                           ChunkEvents* ahead = nullptr) {
   if (count == 0) return cudaSuccess;
-  ChunkEvents events;
-  cudaError_t err = downloadChunks(src, count, stage, s, events);
+  ChunkEvents own;
+  ChunkEvents* events = nullptr;
+  cudaError_t err = chunksOf(src, count, stage, s, ahead, own, events);
   if (err != cudaSuccess) return err;
-  err = cudaEventSynchronize(events.ev[0]);
+  err = cudaEventSynchronize(events->ev[0]);
   if (err != cudaSuccess) return err;
   ready();
-  const std::size_t chunks = events.ev.size();
+  const std::size_t chunk = events->chunk, chunks = (count + chunk - 1) / chunk;
   std::atomic<std::size_t> next{0};
   std::atomic<bool> failed{false};
   std::mutex error_mutex;
@@ -407,15 +429,15 @@ cudaError_t pooledDownload(const T* src, std::size_t count, T* stage, cudaStream
     while (!failed.load(std::memory_order_relaxed)) {
       const std::size_t c = next.fetch_add(1);
       if (c >= chunks) return;
-      const cudaError_t e = cudaEventSynchronize(events.ev[c]);
+      const cudaError_t e = cudaEventSynchronize(events->ev[c]);
       if (e != cudaSuccess) {
         std::lock_guard<std::mutex> lock(error_mutex);
         if (error == cudaSuccess) error = e;
         failed = true;
         return;
       }
-      const std::size_t off = c * events.chunk;
-      place(off, static_cast<const T*>(stage + off), std::min(events.chunk, count - off));
+      const std::size_t off = c * chunk;
+      place(off, static_cast<const T*>(stage + off), std::min(chunk, count - off));
     }
   };
   pool.run(threads, work);
@@ -438,24 +460,26 @@ inline int pooledThreads(std::size_t count, std::size_t held) {
 
 /// The download of `count` elements into `out`, a vector whose storage the caller keeps (its
 /// old contents are replaced): by several threads of `pool` into `out` sized first where
-/// pooledThreads() says so, else by stagedDownload appended to `out` cleared.
+/// pooledThreads() says so, else by stagedDownload appended to `out` cleared (`ahead`: transfers
+/// enqueued before, chunksOf).
 template <class T>
 cudaError_t downloadInto(const T* src, std::size_t count, T* stage, cudaStream_t s,
-                         CopyPool& pool, std::vector<T>& out) {
+                         CopyPool& pool, std::vector<T>& out, ChunkEvents* ahead = nullptr) {
   static_assert(sizeof(T) == sizeof(std::uint64_t), "chunks counted in 8-byte elements");
   const int threads = pooledThreads(count, out.size());
   if (threads == 0) {
     out.clear();
     out.reserve(count);
-    return stagedDownload(src, count, stage, s, [&](const T* first, std::size_t n) {
-      out.insert(out.end(), first, first + n);
-    });
+    return stagedDownload(
+        src, count, stage, s,
+        [&](const T* first, std::size_t n) { out.insert(out.end(), first, first + n); }, ahead);
   }
   return pooledDownload(
       src, count, stage, s, pool, threads, [&] { out.resize(count); },
       [&](std::size_t off, const T* first, std::size_t n) {
         std::memcpy(static_cast<void*>(out.data() + off), first, n * sizeof(T));
-      });
+      },
+      ahead);
 }
 
 }  // namespace staging

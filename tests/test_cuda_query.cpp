@@ -403,6 +403,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_COUNT_ORDER", on_off, not_on_off},
       {"KDET_FCL_CUDA_ONE_TRIP", on_off, not_on_off},
       {"KDET_FCL_CUDA_ONE_TRIP_COPY", {"0", "1", "4"}, {"5", "-1", "one"}},
+      {"KDET_FCL_CUDA_ONE_TRIP_FORECAST", on_off, not_on_off},
       {"KDET_FCL_CUDA_FUSED_ORDER", {"0", "1", "2", "32"}, {"33", "-1", "two"}},
       {"KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", {"1", "256", "65536"}, {"0", "65537", "1k"}},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
@@ -1452,6 +1453,10 @@ TriangleMesh<S> makeFans(std::size_t fans, std::size_t k) {
   return m;
 }
 
+/// Whether a host query's pairs came in the same trip as its counts: written into the stage by
+/// the order (one_trip_copy), or read back by the DMA its forecast queued (forecast_copy).
+bool cameInTheTrip(const cuda::QueryProfile& p) { return p.one_trip_copy || p.forecast_copy; }
+
 /// The most pairs of one segment of the counting order (cuda_backend.cu): the first index of a
 /// pair of `runs[k]` (its kind k, above the bits of `triangles`' indices when there are several
 /// runs: a joint query's), shifted right to at most 16 bits.
@@ -1650,7 +1655,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // KDET_FCL_CUDA_ONE_TRIP; then the floor does not apply: counted by default wherever no
   // segment is too large, and one_trip set where counted) and after them
   // (KDET_FCL_CUDA_ONE_TRIP=0). Every host result here fits one 256 KiB read-back chunk (32,768
-  // pairs), so the one trip also brings the pairs (one_trip_copy), the joint ones dealt out to
+  // pairs), so the one trip also brings the pairs (cameInTheTrip), the joint ones dealt out to
   // the three results from there (OneTripBringsSmallHostResultsAndStepsAsideForLargeOnes has the
   // limits). And the counting order both as one cooperative launch (KDET_FCL_CUDA_FUSED_ORDER:
   // in one trip by default 2 blocks per SM; 1; 32, more than fit at once: as many as fit; after
@@ -1687,7 +1692,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
       const cuda::QueryProfile p = cuda::lastQueryProfile();
       EXPECT_EQ(p.pairs_counted, counted) << what << trips;
       EXPECT_EQ(p.one_trip, trip && counted) << what << trips;
-      if (!p.one_trip) EXPECT_FALSE(p.one_trip_copy) << what << trips;
+      if (!p.one_trip) EXPECT_FALSE(cameInTheTrip(p)) << what << trips;
       if (counted && config.most > 0) {
         EXPECT_GE(p.order_blocks, trip ? 1u : all_sms) << what << trips;
         EXPECT_LE(p.order_blocks, config.most) << what << trips;
@@ -1735,7 +1740,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
     const std::vector<TrianglePair> cloth_self = checkSelf("cloth self", cloth);
     ASSERT_GT(cloth_self.size(), 100u);
     (void)selfPairs(cloth)();  // (its pairs fit one 256 KiB read-back chunk)
-    EXPECT_EQ(cuda::lastQueryProfile().one_trip_copy, trip) << "cloth self" << trips;
+    EXPECT_EQ(cameInTheTrip(cuda::lastQueryProfile()), trip) << "cloth self" << trips;
     const auto cloth_choices = choices(cloth_self, cloth.numTriangles());
     EXPECT_TRUE(cloth_choices.second);  // counted when forced
     EXPECT_GT(checkSelf("big cloth self", big).size(), 100u);
@@ -1793,7 +1798,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
       // In one trip, the three runs dealt out of the stage (all fit one 256 KiB chunk).
       EXPECT_EQ(run().first, want) << what << trips;
       EXPECT_LE(want.size() - 1, 32768u) << what;
-      EXPECT_EQ(cuda::lastQueryProfile().one_trip_copy, trip && fits) << what << trips;
+      EXPECT_EQ(cameInTheTrip(cuda::lastQueryProfile()), trip && fits) << what << trips;
       return fits;
     };
     EXPECT_TRUE(joint(cloth, cloth2, "two cloths, joint"));  // counted when forced
@@ -1865,12 +1870,15 @@ TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOne
   // says), and the one after a small result takes one trip again. Queries into a device buffer
   // always take one trip and do not move the rule. Then KDET_FCL_CUDA_ONE_TRIP_COPY = 2, 4, 0
   // and unset (4: kOneTripMaxChunks): results of up to that many chunks come in the trip. Fans
-  // give exact pair counts: 300, 1,000 and 4,800 (80 fans of 60).
+  // give exact pair counts: 300, 1,000 and 4,800 (80 fans of 60). Without the forecasts
+  // (KDET_FCL_CUDA_ONE_TRIP_FORECAST=0), which take the queries after a host result of the same
+  // mesh otherwise (ForecastReadsThePairsBackBehindTheCountsAtAnySize).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
   kdet_test::ScopedEnv trip_on("KDET_FCL_CUDA_ONE_TRIP", nullptr);  // (the default: on)
+  kdet_test::ScopedEnv no_forecast("KDET_FCL_CUDA_ONE_TRIP_FORECAST", "0");
   kdet_test::ScopedEnv chunk("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
   std::optional<kdet_test::ScopedEnv> copy_one(std::in_place, "KDET_FCL_CUDA_ONE_TRIP_COPY", "1");
   ASSERT_EQ(cuda::kOneTripMaxChunks * 512, 2048u);
@@ -1947,6 +1955,124 @@ TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOne
   kdet_test::ScopedEnv copy_default("KDET_FCL_CUDA_ONE_TRIP_COPY", nullptr);
   step("1,000 pairs by default", mid, 0, want_mid, true, true, true);
   step("4,800 pairs after 1,000 by default", large, 0, want_large, true, false, true);
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, ForecastReadsThePairsBackBehindTheCountsAtAnySize) {
+  // With 4 KiB read-back chunks (512 pairs): a host query whose last host result (the same mesh,
+  // the same kind) held at least one chunk of pairs takes one trip whatever its size, its pairs
+  // delivered into device memory and read back by DMA queued behind the counts, sized from that
+  // forecast (forecast_copy); after a smaller result, the mapped copy (one_trip_copy). A result
+  // larger than the forecast's read-back (after 600 pairs delivered under max_pairs) is read
+  // back after the counts, still in one trip; smaller ones take it. By one thread (new results)
+  // and by the pool (a kept result of 4,800 pairs: 9.4 chunks). A pass that overflows its output
+  // and reruns, and a re-hash that does not fit and is rebuilt, drop the read-back and still
+  // deliver every pair. Joint parts (intersectAll); an inter query's forecast belongs to its
+  // partner. The knob at 0: never.
+  KDET_SKIP_WITHOUT_DEVICE();
+  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no fallback)";
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
+  kdet_test::ScopedEnv trip_on("KDET_FCL_CUDA_ONE_TRIP", nullptr);
+  kdet_test::ScopedEnv copy_on("KDET_FCL_CUDA_ONE_TRIP_COPY", nullptr);
+  kdet_test::ScopedEnv forecast_on("KDET_FCL_CUDA_ONE_TRIP_FORECAST", nullptr);  // (default on)
+  kdet_test::ScopedEnv chunk("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
+  cuda::setProfiling(true);
+  const HashedMesh<S> small(makeFans<S>(1, 300)), large(makeFans<S>(80, 60));
+  const std::vector<TrianglePair> want_small = sorted(intersectSelf(small, on(Backend::Cpu)).pairs),
+                                  want_large = sorted(intersectSelf(large, on(Backend::Cpu)).pairs);
+  ASSERT_EQ(want_small.size(), 300u);
+  ASSERT_EQ(want_large.size(), 4800u);
+  const std::vector<TrianglePair> first600(want_large.begin(), want_large.begin() + 600);
+  auto expectProfile = [](const std::string& what, bool forecast) {
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    EXPECT_EQ(p.forecast_copy, forecast) << what;
+    if (forecast) {
+      EXPECT_TRUE(p.one_trip) << what;
+      EXPECT_FALSE(p.one_trip_copy) << what;
+    }
+    return p;
+  };
+  // A host query of `m` into a new result, expecting `forecast`.
+  auto step = [&](const std::string& what, const HashedMesh<S>& m, std::size_t max_pairs,
+                  const std::vector<TrianglePair>& want, bool forecast) {
+    EXPECT_EQ(intersectSelf(m, on(Backend::Cuda, max_pairs)).pairs, want) << what;
+    return expectProfile(what, forecast);
+  };
+  // (A mesh's first query may find a forecast: the cache entry of an earlier test's mesh at the
+  // same address, taken over with its last counts. Those first queries are not asserted on.)
+  EXPECT_EQ(intersectSelf(small, on(Backend::Cuda)).pairs, want_small);
+  EXPECT_TRUE(step("300 pairs after 300 (under a chunk)", small, 0, want_small, false)
+                  .one_trip_copy);
+  EXPECT_EQ(intersectSelf(large, on(Backend::Cuda)).pairs, want_large);
+  const cuda::QueryProfile big = step("4,800 pairs after 4,800", large, 0, want_large, true);
+  EXPECT_TRUE(big.one_trip) << "9.4 chunks in one trip";
+  step("600 of 4,800 pairs after 4,800", large, 600, first600, true);
+  const cuda::QueryProfile under =
+      step("4,800 pairs after 600 (more than the read-back)", large, 0, want_large, false);
+  EXPECT_TRUE(under.one_trip);
+  step("4,800 pairs after 4,800 again", large, 0, want_large, true);
+  {  // Into a result kept from frame to frame: the pool copies the chunks.
+    QueryResult kept;
+    for (int frame = 0; frame < 3; ++frame) {
+      const std::string what = "kept result, frame " + std::to_string(frame);
+      intersectSelf(large, kept, on(Backend::Cuda));
+      EXPECT_EQ(kept.pairs, want_large) << what;
+      expectProfile(what, true);
+    }
+  }
+  {  // An output overflow: the first pass reruns, its read-back dropped.
+    kdet_test::ScopedEnv cap("KDET_FCL_CUDA_PAIR_CAPACITY", "1000");
+    const cuda::QueryProfile p = step("4,800 pairs, output overflow", large, 0, want_large, true);
+    EXPECT_GE(p.passes, 2);
+  }
+  {  // A re-hash that did not fit: rebuilt with read-backs, the query rerun.
+    kdet_test::ScopedEnv cap("KDET_FCL_CUDA_REHASH_CAP", "100");
+    cuda::markDeformed(large);
+    const cuda::QueryProfile p = step("4,800 pairs, re-hash rebuilt", large, 0, want_large, true);
+    EXPECT_EQ(p.rehash_fallbacks, 1);
+    EXPECT_GE(p.passes, 2);
+  }
+  {  // Two meshes hashed as one: the three parts, from the second frame by the forecast.
+    const HashedMesh<S> a(makeFans<S>(1, 300)), b(makeFans<S>(2, 500));
+    const QueryOptions c = on(Backend::Cpu);
+    const std::vector<TrianglePair> want_a = sorted(intersectSelf(a, c).pairs),
+                                    want_b = sorted(intersectSelf(b, c).pairs),
+                                    want_ab = sorted(intersectMeshes(a, b, c).pairs);
+    ASSERT_GE(want_ab.size(), 512u);  // (a forecast of at least one chunk)
+    AllPairsResult all;
+    for (int frame = 0; frame < 3; ++frame) {
+      const std::string what = "joint, frame " + std::to_string(frame);
+      intersectAll(a, b, all, on(Backend::Cuda));
+      EXPECT_EQ(all.self_a.pairs, want_a) << what;
+      EXPECT_EQ(all.self_b.pairs, want_b) << what;
+      EXPECT_EQ(all.inter.pairs, want_ab) << what;
+      EXPECT_TRUE(cuda::lastQueryProfile().joint) << what;
+      if (frame > 0) expectProfile(what, true);
+    }
+    // Inter queries: the forecast of (a, b) is not that of (a, large), nor kept across it.
+    auto inter = [&](const std::string& what, const HashedMesh<S>& other,
+                     const std::vector<TrianglePair>& want, bool forecast) {
+      EXPECT_EQ(intersectMeshes(a, other, on(Backend::Cuda)).pairs, want) << what;
+      expectProfile(what, forecast);
+    };
+    const std::vector<TrianglePair> want_al = sorted(intersectMeshes(a, large, c).pairs);
+    EXPECT_EQ(intersectMeshes(a, b, on(Backend::Cuda)).pairs, want_ab);
+    inter("a, b again", b, want_ab, true);
+    inter("a, large", large, want_al, false);
+    inter("a, b after a, large", b, want_ab, false);
+    inter("a, b once more", b, want_ab, true);
+  }
+  {
+    kdet_test::ScopedEnv off("KDET_FCL_CUDA_ONE_TRIP_FORECAST", "0");
+    step("4,800 pairs, forecasts off", large, 0, want_large, false);
+    const cuda::QueryProfile p = step("4,800 pairs after 4,800, forecasts off", large, 0,
+                                      want_large, false);
+    EXPECT_FALSE(p.one_trip) << "after a host result of 9.4 chunks: the counts first";
+  }
   cuda::setProfiling(false);
 #endif
 }

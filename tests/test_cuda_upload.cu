@@ -2,7 +2,8 @@
 // Upload: every byte arrives, nothing beyond the range is written, whatever the number of host
 // threads and the chunk size. Download: every element arrives, in order, in whole-element chunks,
 // and a throwing consumer leaves cleanly; into a kept vector (downloadInto) by several threads of
-// a persistent pool (pooledDownload, CopyPool), the same elements, old contents replaced. The
+// a persistent pool (pooledDownload, CopyPool), the same elements, old contents replaced; and
+// from chunks queued ahead of the count, any count they cover. The
 // knobs are parsed and bounded, and a value out of bounds throws. Pinned uploads (a registered
 // range's whole pages by DMA, its ends staged) bring every byte too. The copy tests skip without a device; the knob, page and empty-range tests need
 // none.
@@ -417,6 +418,78 @@ TEST(PooledDownload, ReadyRunsAfterTheFirstChunkAndAThrowLeavesCleanly) {
                std::runtime_error);
   EXPECT_EQ(calls, 0u);
   EXPECT_EQ(cudaStreamQuery(nullptr), cudaSuccess);
+  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
+  EXPECT_EQ(cudaFree(dev), cudaSuccess);
+}
+
+TEST(PooledDownload, ChunksQueuedAheadServeEveryCountTheyCover) {
+  // The CUDA backend queues a read-back before it knows the count (a forecast's, runQuery):
+  // downloadChunks of `ahead` elements, then downloadInto / stagedDownload of any n <= ahead
+  // with those chunks. The n elements arrive, in order, by one thread and by the pool, from
+  // the chunks queued, none enqueued again; the chunks past n are left to their owner's drain.
+  if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
+  const std::size_t most = 20000;
+  std::vector<Pair8> src(most);
+  for (std::size_t i = 0; i < most; ++i)
+    src[i] = {static_cast<std::uint32_t>(i * 40503u + 1), static_cast<std::uint32_t>(i ^ 0x5a5a)};
+  Pair8* dev = nullptr;
+  ASSERT_EQ(cudaMalloc(&dev, most * sizeof(Pair8)), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(dev, src.data(), most * sizeof(Pair8), cudaMemcpyHostToDevice),
+            cudaSuccess);
+  Pair8* stage = nullptr;
+  ASSERT_EQ(cudaMallocHost(&stage, most * sizeof(Pair8)), cudaSuccess);
+  cudaStream_t s = nullptr;
+  ASSERT_EQ(cudaStreamCreate(&s), cudaSuccess);
+  ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");  // 512 pairs per chunk
+  ScopedEnv t("KDET_FCL_CUDA_DOWNLOAD_THREADS", "4");
+  kdet_fcl::staging::CopyPool pool;
+  std::vector<Pair8> kept(most);  // held: the pool may take the larger counts
+  int pooled = 0, cases = 0;
+  for (std::size_t ahead : {std::size_t(512), std::size_t(3000), most}) {
+    for (std::size_t n : {std::size_t(1), std::size_t(511), std::size_t(512), std::size_t(513),
+                          std::size_t(2999), std::size_t(3000), most - 1, most}) {
+      if (n > ahead) continue;
+      const std::size_t shift = std::size_t(cases++) % 5;  // a stale stage would be seen
+      const std::size_t cover = std::min(ahead, most - shift), k = std::min(n, cover);
+      SCOPED_TRACE("ahead " + std::to_string(cover) + ", pairs " + std::to_string(k));
+      std::memset(static_cast<void*>(stage), 0xEE, most * sizeof(Pair8));
+      {
+        kdet_fcl::staging::ChunkEvents queued;
+        ASSERT_EQ(kdet_fcl::staging::downloadChunks(dev + shift, cover, stage, s, queued),
+                  cudaSuccess);
+        ASSERT_EQ(queued.ev.size(), (cover + 511) / 512);
+        const std::size_t events = queued.ev.size();
+        pooled += kdet_fcl::staging::pooledThreads(k, kept.size()) > 0;
+        ASSERT_EQ(kdet_fcl::staging::downloadInto(dev + shift, k, stage, s, pool, kept, &queued),
+                  cudaSuccess);
+        EXPECT_EQ(queued.ev.size(), events) << "nothing enqueued again";
+        ASSERT_EQ(kept.size(), k);
+        EXPECT_EQ(std::memcmp(kept.data(), src.data() + shift, k * sizeof(Pair8)), 0);
+      }  // (drained: its chunks past k have run)
+      {
+        kdet_fcl::staging::ChunkEvents queued;
+        std::memset(static_cast<void*>(stage), 0xEE, most * sizeof(Pair8));
+        ASSERT_EQ(kdet_fcl::staging::downloadChunks(dev + shift, cover, stage, s, queued),
+                  cudaSuccess);
+        std::vector<Pair8> got;
+        std::size_t calls = 0;
+        ASSERT_EQ(stagedDownload(
+                      dev + shift, k, stage, s,
+                      [&](const Pair8* first, std::size_t m) {
+                        got.insert(got.end(), first, first + m);
+                        ++calls;
+                      },
+                      &queued),
+                  cudaSuccess);
+        EXPECT_EQ(calls, (k + 511) / 512) << "one call per chunk of the k, none past them";
+        ASSERT_EQ(got.size(), k);
+        EXPECT_EQ(std::memcmp(got.data(), src.data() + shift, k * sizeof(Pair8)), 0);
+      }
+      kept.resize(most);  // (held again for the next case)
+    }
+  }
+  EXPECT_GT(pooled, 3) << "the pooled path ran";
+  EXPECT_EQ(cudaStreamDestroy(s), cudaSuccess);
   EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
   EXPECT_EQ(cudaFree(dev), cudaSuccess);
 }
