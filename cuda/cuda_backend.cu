@@ -2762,20 +2762,21 @@ std::size_t oneTripCopyChunks() {
 }
 
 /// Whether a host query whose last host result (these meshes, this kind: runQuery's forecast)
-/// held at least one read-back chunk of pairs (KDET_FCL_CUDA_DOWNLOAD_CHUNK: 32,768 by default)
-/// takes one trip with its pairs delivered into device memory and read back by DMA, the
-/// read-back sized from that forecast and queued right behind the pass's counts, whatever its
-/// size (forecastPairs): KDET_FCL_CUDA_ONE_TRIP_FORECAST (default on; needs the one trip). The
-/// pairs then cross the bus by DMA instead of as the order kernel's writes into mapped memory
+/// held one to kOneTripMaxChunks read-back chunks of pairs (KDET_FCL_CUDA_DOWNLOAD_CHUNK; 32,768
+/// to 131,072 pairs by default) has them delivered into device memory in its one trip and read
+/// back by DMA, sized from that forecast and queued right behind the pass's counts
+/// (forecastPairs): KDET_FCL_CUDA_ONE_TRIP_FORECAST (default on; needs the one trip). The pairs
+/// then cross the bus by DMA instead of as the order kernel's writes into mapped memory
 /// (oneTripCopyChunks; ncu, H100, the cloth ball's 61,530 pairs: that kernel took 39.7 us with
-/// them, 15.8 without), and a large result no longer waits for the counts before its order and
-/// read-back are queued. H100, gpu_bench, three rounds each way (benchmarks/RESULTS-gpu.md):
-/// the two funnel frames (48,538 pairs) 0.279-0.307 -> 0.259-0.273 ms per frame, the two n-body
-/// frames (70,169) 0.560-0.604 -> 0.554-0.557, the cloth ball level to -0.007; the results of a
-/// few thousand pairs took 0.004-0.006 ms more that way (a DMA's and its event's fixed costs
-/// against a kernel's few KB of writes), hence the chunk's floor. A query with more pairs than
-/// the forecast's read-back holds reads them all back after the counts (drained first). Read at
-/// every query.
+/// them, 15.8 without). H100, gpu_bench, three rounds each way (benchmarks/RESULTS-gpu.md): the
+/// output of the two funnel frames (48,538 pairs) 0.077-0.085 -> 0.059-0.073 ms, of the two
+/// n-body frames (70,169) 0.106-0.166 -> 0.096-0.128, the cloth ball's (61,530) level. Not
+/// below one chunk: results of a few thousand pairs took 0.004-0.006 ms more that way (a DMA's
+/// and its event's fixed costs against a kernel's few KB of writes). Not above kOneTripMaxChunks:
+/// the two cloth-ball frames' 445,614 pairs took 0.01-0.03 ms more than with their order and
+/// read-back queued after the counts (the host's queueing then runs while the order does). A
+/// query with more pairs than the forecast's read-back holds reads them all back after the counts
+/// (drained first). Read at every query.
 bool oneTripForecastOn() { return detail::switchKnob("KDET_FCL_CUDA_ONE_TRIP_FORECAST", true); }
 
 /// The pairs a forecast's read-back covers: the forecast `f` and a sixteenth more, plus 512
@@ -3015,16 +3016,17 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   // back. Not for a host result when the last one took more than kOneTripMaxChunks chunks: the
   // host then enqueues a copy and an event per chunk (a few us each) after the counts, which the
   // order's kernels cover when they are queued after the counts instead.
-  // With a forecast (a host result of this query before, of at least one read-back chunk:
-  // oneTripForecastOn), the one trip instead delivers the pairs into device memory and queues
-  // their read-back by DMA, sized from the forecast, right behind the counts, whatever its size;
-  // the host waits for the counts alone and copies the chunks out of the stage as they arrive.
+  // With a forecast (a host result of this query before, of one to kOneTripMaxChunks read-back
+  // chunks: oneTripForecastOn), the one trip instead delivers the pairs into device memory and
+  // queues their read-back by DMA, sized from the forecast, right behind the counts; the host
+  // waits for the counts alone and copies the chunks out of the stage as they arrive.
   const std::size_t chunk_pairs =
       std::min<std::size_t>(staging::downloadChunkElements(sizeof(TrianglePair)), 0x7FFFFFFF);
-  const std::size_t forecast_pairs = dev == nullptr && forecast != nullptr && counting &&
-                                             *forecast >= chunk_pairs && oneTripForecastOn()
-                                         ? *forecast
-                                         : 0;
+  const std::size_t forecast_pairs =
+      dev == nullptr && forecast != nullptr && counting && *forecast >= chunk_pairs &&
+              *forecast <= kOneTripMaxChunks * chunk_pairs && oneTripForecastOn()
+          ? *forecast
+          : 0;
   const bool one_trip =
       counting && oneTripOn() &&
       (dev != nullptr || forecast_pairs > 0 ||

@@ -70,9 +70,9 @@
 // and the pairs (any pair count; the radix sort still runs, after the counts, where a segment
 // holds more than 1024; not for a host result after one of more than kOneTripMaxChunks
 // chunks; KDET_FCL_CUDA_ONE_TRIP=0: the counts first, then the order; read at every query).
-// A host query whose last host result (same meshes, same kind) held at least one read-back chunk
-// of pairs instead has them delivered into device memory and read back by DMA queued right
-// behind the counts, sized from that forecast, at any size (KDET_FCL_CUDA_ONE_TRIP_FORECAST=0:
+// A host query whose last host result (same meshes, same kind) held one to kOneTripMaxChunks
+// read-back chunks of pairs instead has them delivered into device memory and read back by DMA
+// queued right behind the counts, sized from that forecast (KDET_FCL_CUDA_ONE_TRIP_FORECAST=0:
 // never; read at every query). The
 // counting order's steps (the scan, the scatter, the rank and delivery, a small host result's
 // straight into the stage) run as one cooperative launch whose grid meets between them: in one
@@ -279,17 +279,16 @@ struct QueryProfile {
                           ///< sized on the device, so the host waited once for the counts and
                           ///< the ordered pairs (KDET_FCL_CUDA_ONE_TRIP; any pair count; not
                           ///< after a segment of more than 1024 pairs, nor for a host result
-                          ///< after one of more than kOneTripMaxChunks read-back chunks, unless
-                          ///< a forecast: forecast_copy).
+                          ///< after one of more than kOneTripMaxChunks read-back chunks).
                           ///< False as pairs_counted
   bool one_trip_copy = false;  ///< and a host result's pairs (at most kOneTripMaxChunks
                                ///< read-back chunks, KDET_FCL_CUDA_DOWNLOAD_CHUNK;
                                ///< KDET_FCL_CUDA_ONE_TRIP_COPY) came in that same trip, written
                                ///< by a kernel into the page-locked stage
   bool forecast_copy = false;  ///< or came by DMA queued in that trip behind the counts, sized
-                               ///< from the pairs this query delivered last time (at least one
-                               ///< read-back chunk; KDET_FCL_CUDA_ONE_TRIP_FORECAST), and held
-                               ///< them all
+                               ///< from the pairs this query delivered last time (one to
+                               ///< kOneTripMaxChunks read-back chunks;
+                               ///< KDET_FCL_CUDA_ONE_TRIP_FORECAST), and held them all
   unsigned int order_blocks = 0;  ///< the counting order ran as one cooperative launch of this
                                   ///< many blocks (KDET_FCL_CUDA_FUSED_ORDER); 0: in five
                                   ///< launches, or not counted

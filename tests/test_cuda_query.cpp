@@ -1872,7 +1872,7 @@ TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOne
   // and unset (4: kOneTripMaxChunks): results of up to that many chunks come in the trip. Fans
   // give exact pair counts: 300, 1,000 and 4,800 (80 fans of 60). Without the forecasts
   // (KDET_FCL_CUDA_ONE_TRIP_FORECAST=0), which take the queries after a host result of the same
-  // mesh otherwise (ForecastReadsThePairsBackBehindTheCountsAtAnySize).
+  // mesh otherwise (ForecastReadsThePairsBackBehindTheCounts).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -1959,17 +1959,18 @@ TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOne
 #endif
 }
 
-TYPED_TEST(CudaQueryTyped, ForecastReadsThePairsBackBehindTheCountsAtAnySize) {
-  // With 4 KiB read-back chunks (512 pairs): a host query whose last host result (the same mesh,
-  // the same kind) held at least one chunk of pairs takes one trip whatever its size, its pairs
-  // delivered into device memory and read back by DMA queued behind the counts, sized from that
-  // forecast (forecast_copy); after a smaller result, the mapped copy (one_trip_copy). A result
-  // larger than the forecast's read-back (after 600 pairs delivered under max_pairs) is read
-  // back after the counts, still in one trip; smaller ones take it. By one thread (new results)
-  // and by the pool (a kept result of 4,800 pairs: 9.4 chunks). A pass that overflows its output
-  // and reruns, and a re-hash that does not fit and is rebuilt, drop the read-back and still
-  // deliver every pair. Joint parts (intersectAll); an inter query's forecast belongs to its
-  // partner. The knob at 0: never.
+TYPED_TEST(CudaQueryTyped, ForecastReadsThePairsBackBehindTheCounts) {
+  // With 4 KiB read-back chunks (512 pairs; cuda::kOneTripMaxChunks of them: 2,048): a host
+  // query whose last host result (the same mesh, the same kind) held one to four chunks of pairs
+  // has them delivered into device memory in its one trip and read back by DMA queued behind the
+  // counts, sized from that forecast (forecast_copy); after a smaller result, the mapped copy
+  // (one_trip_copy); after a larger one, the counts first (one_trip false). A result larger than
+  // the forecast's read-back (after 600 pairs delivered under max_pairs) is read back after the
+  // counts, still in one trip; smaller ones take it. By one thread (new results) and by the pool
+  // (a kept result of 2,048 pairs: four chunks). A pass that overflows its output and reruns, and
+  // a re-hash that does not fit and is rebuilt, drop the read-back and still deliver every pair.
+  // Joint parts (intersectAll); an inter query's forecast belongs to its partner. The knob at 0:
+  // never.
   KDET_SKIP_WITHOUT_DEVICE();
   if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
     GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no fallback)";
@@ -1980,13 +1981,18 @@ TYPED_TEST(CudaQueryTyped, ForecastReadsThePairsBackBehindTheCountsAtAnySize) {
   kdet_test::ScopedEnv copy_on("KDET_FCL_CUDA_ONE_TRIP_COPY", nullptr);
   kdet_test::ScopedEnv forecast_on("KDET_FCL_CUDA_ONE_TRIP_FORECAST", nullptr);  // (default on)
   kdet_test::ScopedEnv chunk("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
+  ASSERT_EQ(cuda::kOneTripMaxChunks * 512, 2048u);
   cuda::setProfiling(true);
-  const HashedMesh<S> small(makeFans<S>(1, 300)), large(makeFans<S>(80, 60));
-  const std::vector<TrianglePair> want_small = sorted(intersectSelf(small, on(Backend::Cpu)).pairs),
-                                  want_large = sorted(intersectSelf(large, on(Backend::Cpu)).pairs);
+  const HashedMesh<S> small(makeFans<S>(1, 300)), four(makeFans<S>(4, 512)),
+      large(makeFans<S>(80, 60));
+  const QueryOptions cpu = on(Backend::Cpu);
+  const std::vector<TrianglePair> want_small = sorted(intersectSelf(small, cpu).pairs),
+                                  want_four = sorted(intersectSelf(four, cpu).pairs),
+                                  want_large = sorted(intersectSelf(large, cpu).pairs);
   ASSERT_EQ(want_small.size(), 300u);
+  ASSERT_EQ(want_four.size(), 2048u);
   ASSERT_EQ(want_large.size(), 4800u);
-  const std::vector<TrianglePair> first600(want_large.begin(), want_large.begin() + 600);
+  const std::vector<TrianglePair> first600(want_four.begin(), want_four.begin() + 600);
   auto expectProfile = [](const std::string& what, bool forecast) {
     const cuda::QueryProfile p = cuda::lastQueryProfile();
     EXPECT_EQ(p.forecast_copy, forecast) << what;
@@ -2007,42 +2013,48 @@ TYPED_TEST(CudaQueryTyped, ForecastReadsThePairsBackBehindTheCountsAtAnySize) {
   EXPECT_EQ(intersectSelf(small, on(Backend::Cuda)).pairs, want_small);
   EXPECT_TRUE(step("300 pairs after 300 (under a chunk)", small, 0, want_small, false)
                   .one_trip_copy);
-  EXPECT_EQ(intersectSelf(large, on(Backend::Cuda)).pairs, want_large);
-  const cuda::QueryProfile big = step("4,800 pairs after 4,800", large, 0, want_large, true);
-  EXPECT_TRUE(big.one_trip) << "9.4 chunks in one trip";
-  step("600 of 4,800 pairs after 4,800", large, 600, first600, true);
+  EXPECT_EQ(intersectSelf(four, on(Backend::Cuda)).pairs, want_four);
+  step("2,048 pairs after 2,048", four, 0, want_four, true);
+  step("600 of 2,048 pairs after 2,048", four, 600, first600, true);
   const cuda::QueryProfile under =
-      step("4,800 pairs after 600 (more than the read-back)", large, 0, want_large, false);
+      step("2,048 pairs after 600 (more than the read-back)", four, 0, want_four, false);
   EXPECT_TRUE(under.one_trip);
-  step("4,800 pairs after 4,800 again", large, 0, want_large, true);
-  {  // Into a result kept from frame to frame: the pool copies the chunks.
+  step("2,048 pairs after 2,048 again", four, 0, want_four, true);
+  EXPECT_EQ(intersectSelf(large, on(Backend::Cuda)).pairs, want_large);
+  EXPECT_FALSE(step("4,800 pairs after 4,800 (over four chunks)", large, 0, want_large, false)
+                   .one_trip)
+      << "the counts first";
+  step("300 pairs after the other mesh's 4,800", small, 0, want_small, false);
+  step("2,048 pairs after the other mesh's 300", four, 0, want_four, true);
+  {  // Into a result kept from frame to frame: the pool copies the four chunks.
     QueryResult kept;
     for (int frame = 0; frame < 3; ++frame) {
       const std::string what = "kept result, frame " + std::to_string(frame);
-      intersectSelf(large, kept, on(Backend::Cuda));
-      EXPECT_EQ(kept.pairs, want_large) << what;
+      intersectSelf(four, kept, on(Backend::Cuda));
+      EXPECT_EQ(kept.pairs, want_four) << what;
       expectProfile(what, true);
     }
   }
   {  // An output overflow: the first pass reruns, its read-back dropped.
     kdet_test::ScopedEnv cap("KDET_FCL_CUDA_PAIR_CAPACITY", "1000");
-    const cuda::QueryProfile p = step("4,800 pairs, output overflow", large, 0, want_large, true);
+    const cuda::QueryProfile p = step("2,048 pairs, output overflow", four, 0, want_four, true);
     EXPECT_GE(p.passes, 2);
   }
   {  // A re-hash that did not fit: rebuilt with read-backs, the query rerun.
     kdet_test::ScopedEnv cap("KDET_FCL_CUDA_REHASH_CAP", "100");
-    cuda::markDeformed(large);
-    const cuda::QueryProfile p = step("4,800 pairs, re-hash rebuilt", large, 0, want_large, true);
+    cuda::markDeformed(four);
+    const cuda::QueryProfile p = step("2,048 pairs, re-hash rebuilt", four, 0, want_four, true);
     EXPECT_EQ(p.rehash_fallbacks, 1);
     EXPECT_GE(p.passes, 2);
   }
   {  // Two meshes hashed as one: the three parts, from the second frame by the forecast.
-    const HashedMesh<S> a(makeFans<S>(1, 300)), b(makeFans<S>(2, 500));
-    const QueryOptions c = on(Backend::Cpu);
-    const std::vector<TrianglePair> want_a = sorted(intersectSelf(a, c).pairs),
-                                    want_b = sorted(intersectSelf(b, c).pairs),
-                                    want_ab = sorted(intersectMeshes(a, b, c).pairs);
-    ASSERT_GE(want_ab.size(), 512u);  // (a forecast of at least one chunk)
+    const HashedMesh<S> a(makeFans<S>(1, 300)), b(makeFans<S>(1, 500));
+    const std::vector<TrianglePair> want_a = sorted(intersectSelf(a, cpu).pairs),
+                                    want_b = sorted(intersectSelf(b, cpu).pairs),
+                                    want_ab = sorted(intersectMeshes(a, b, cpu).pairs);
+    // (one to four chunks, the three parts together and the pairs across alone)
+    ASSERT_GE(want_ab.size(), 512u);
+    ASSERT_LE(want_a.size() + want_b.size() + want_ab.size(), 2048u);
     AllPairsResult all;
     for (int frame = 0; frame < 3; ++frame) {
       const std::string what = "joint, frame " + std::to_string(frame);
@@ -2053,25 +2065,25 @@ TYPED_TEST(CudaQueryTyped, ForecastReadsThePairsBackBehindTheCountsAtAnySize) {
       EXPECT_TRUE(cuda::lastQueryProfile().joint) << what;
       if (frame > 0) expectProfile(what, true);
     }
-    // Inter queries: the forecast of (a, b) is not that of (a, large), nor kept across it.
+    // Inter queries: the forecast of (a, b) is not that of (a, four), nor kept across it.
     auto inter = [&](const std::string& what, const HashedMesh<S>& other,
                      const std::vector<TrianglePair>& want, bool forecast) {
       EXPECT_EQ(intersectMeshes(a, other, on(Backend::Cuda)).pairs, want) << what;
       expectProfile(what, forecast);
     };
-    const std::vector<TrianglePair> want_al = sorted(intersectMeshes(a, large, c).pairs);
+    const std::vector<TrianglePair> want_a4 = sorted(intersectMeshes(a, four, cpu).pairs);
     EXPECT_EQ(intersectMeshes(a, b, on(Backend::Cuda)).pairs, want_ab);
     inter("a, b again", b, want_ab, true);
-    inter("a, large", large, want_al, false);
-    inter("a, b after a, large", b, want_ab, false);
+    inter("a, four", four, want_a4, false);
+    inter("a, b after a, four", b, want_ab, false);
     inter("a, b once more", b, want_ab, true);
   }
   {
     kdet_test::ScopedEnv off("KDET_FCL_CUDA_ONE_TRIP_FORECAST", "0");
-    step("4,800 pairs, forecasts off", large, 0, want_large, false);
-    const cuda::QueryProfile p = step("4,800 pairs after 4,800, forecasts off", large, 0,
-                                      want_large, false);
-    EXPECT_FALSE(p.one_trip) << "after a host result of 9.4 chunks: the counts first";
+    const cuda::QueryProfile p =
+        step("2,048 pairs, forecasts off", four, 0, want_four, false);
+    EXPECT_TRUE(p.one_trip);
+    EXPECT_TRUE(p.one_trip_copy) << "four chunks: written into the stage by the order";
   }
   cuda::setProfiling(false);
 #endif
