@@ -2771,9 +2771,9 @@ std::size_t oneTripCopyChunks() {
 /// them, 15.8 without). H100, gpu_bench, three rounds each way (benchmarks/RESULTS-gpu.md): the
 /// output of the two funnel frames (48,538 pairs) 0.077-0.085 -> 0.059-0.073 ms, of the two
 /// n-body frames (70,169) 0.106-0.166 -> 0.096-0.128, the cloth ball's (61,530) level. Not
-/// below one chunk: results of a few thousand pairs took 0.004-0.006 ms more that way (a DMA's
+/// below one chunk: results of a few thousand pairs took 0.004-0.009 ms more that way (a DMA's
 /// and its event's fixed costs against a kernel's few KB of writes). Not above kOneTripMaxChunks:
-/// the two cloth-ball frames' 445,614 pairs took 0.01-0.03 ms more than with their order and
+/// the two cloth-ball frames' 445,614 pairs took 0.007-0.021 ms more than with their order and
 /// read-back queued after the counts (the host's queueing then runs while the order does). A
 /// query with more pairs than the forecast's read-back holds reads them all back after the counts
 /// (drained first). Read at every query.

@@ -171,6 +171,28 @@ struct Pair8 {
   std::uint32_t a, b;
 };
 
+/// `count` pairs made by `make(i)`, copied to the device (`dev`), and a page-locked stage of as
+/// many (`stage`), for the download tests; freed with the rig.
+struct PairRig {
+  std::vector<Pair8> src;
+  Pair8* dev = nullptr;
+  Pair8* stage = nullptr;
+  template <class Make>
+  PairRig(std::size_t count, Make&& make) : src(count) {
+    for (std::size_t i = 0; i < count; ++i) src[i] = make(i);
+    EXPECT_EQ(cudaMalloc(&dev, count * sizeof(Pair8)), cudaSuccess);
+    EXPECT_EQ(cudaMemcpy(dev, src.data(), count * sizeof(Pair8), cudaMemcpyHostToDevice),
+              cudaSuccess);
+    EXPECT_EQ(cudaMallocHost(&stage, count * sizeof(Pair8)), cudaSuccess);
+  }
+  PairRig(const PairRig&) = delete;
+  PairRig& operator=(const PairRig&) = delete;
+  ~PairRig() {
+    EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
+    EXPECT_EQ(cudaFree(dev), cudaSuccess);
+  }
+};
+
 /// Downloads `count` elements of `dev` (+ shift) through `stage` and checks that the chunks come
 /// in order, each a whole number of elements at most `chunk_bytes` long, and the values.
 template <class T>
@@ -342,15 +364,13 @@ TEST(CopyPool, RunsTheWorkOnTheThreadsAskedForAndKeepsThem) {
 TEST(PooledDownload, EveryElementArrivesIntoAKeptVectorWhateverItHeld) {
   if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t most = (std::size_t(1) << 18) + 3;  // pairs: 2 MiB
-  std::vector<Pair8> src(most);
-  for (std::size_t i = 0; i < most; ++i)
-    src[i] = {static_cast<std::uint32_t>(i * 2654435761u), static_cast<std::uint32_t>(~i)};
-  Pair8* dev = nullptr;
-  ASSERT_EQ(cudaMalloc(&dev, most * sizeof(Pair8)), cudaSuccess);
-  ASSERT_EQ(cudaMemcpy(dev, src.data(), most * sizeof(Pair8), cudaMemcpyHostToDevice),
-            cudaSuccess);
-  Pair8* stage = nullptr;
-  ASSERT_EQ(cudaMallocHost(&stage, most * sizeof(Pair8)), cudaSuccess);
+  const PairRig rig(most, [](std::size_t i) {
+    return Pair8{static_cast<std::uint32_t>(i * 2654435761u), static_cast<std::uint32_t>(~i)};
+  });
+  const std::vector<Pair8>& src = rig.src;
+  Pair8* const dev = rig.dev;
+  Pair8* const stage = rig.stage;
+  ASSERT_TRUE(dev != nullptr && stage != nullptr);
   kdet_fcl::staging::CopyPool pool;
   std::vector<Pair8> kept;  // kept across the cases: larger, smaller and empty in turn
   int pooled = 0;
@@ -376,20 +396,16 @@ TEST(PooledDownload, EveryElementArrivesIntoAKeptVectorWhateverItHeld) {
   EXPECT_GT(pooled, 6) << "the pooled path ran";
   EXPECT_GT(pool.workers(), 0);
   EXPECT_EQ(cudaGetLastError(), cudaSuccess);
-  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
-  EXPECT_EQ(cudaFree(dev), cudaSuccess);
 }
 
 TEST(PooledDownload, ReadyRunsAfterTheFirstChunkAndAThrowLeavesCleanly) {
   if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t n = 100000;
-  std::vector<Pair8> src(n);
-  for (std::size_t i = 0; i < n; ++i) src[i] = {static_cast<std::uint32_t>(i), 7u};
-  Pair8* dev = nullptr;
-  ASSERT_EQ(cudaMalloc(&dev, n * sizeof(Pair8)), cudaSuccess);
-  ASSERT_EQ(cudaMemcpy(dev, src.data(), n * sizeof(Pair8), cudaMemcpyHostToDevice), cudaSuccess);
-  Pair8* stage = nullptr;
-  ASSERT_EQ(cudaMallocHost(&stage, n * sizeof(Pair8)), cudaSuccess);
+  const PairRig rig(n, [](std::size_t i) { return Pair8{static_cast<std::uint32_t>(i), 7u}; });
+  const std::vector<Pair8>& src = rig.src;
+  Pair8* const dev = rig.dev;
+  Pair8* const stage = rig.stage;
+  ASSERT_TRUE(dev != nullptr && stage != nullptr);
   ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
   kdet_fcl::staging::CopyPool pool;
   // ready() sees the first chunk in the stage; every element is placed once, where it belongs.
@@ -418,8 +434,6 @@ TEST(PooledDownload, ReadyRunsAfterTheFirstChunkAndAThrowLeavesCleanly) {
                std::runtime_error);
   EXPECT_EQ(calls, 0u);
   EXPECT_EQ(cudaStreamQuery(nullptr), cudaSuccess);
-  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
-  EXPECT_EQ(cudaFree(dev), cudaSuccess);
 }
 
 TEST(PooledDownload, ChunksQueuedAheadServeEveryCountTheyCover) {
@@ -429,15 +443,14 @@ TEST(PooledDownload, ChunksQueuedAheadServeEveryCountTheyCover) {
   // the chunks queued, none enqueued again; the chunks past n are left to their owner's drain.
   if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";
   const std::size_t most = 20000;
-  std::vector<Pair8> src(most);
-  for (std::size_t i = 0; i < most; ++i)
-    src[i] = {static_cast<std::uint32_t>(i * 40503u + 1), static_cast<std::uint32_t>(i ^ 0x5a5a)};
-  Pair8* dev = nullptr;
-  ASSERT_EQ(cudaMalloc(&dev, most * sizeof(Pair8)), cudaSuccess);
-  ASSERT_EQ(cudaMemcpy(dev, src.data(), most * sizeof(Pair8), cudaMemcpyHostToDevice),
-            cudaSuccess);
-  Pair8* stage = nullptr;
-  ASSERT_EQ(cudaMallocHost(&stage, most * sizeof(Pair8)), cudaSuccess);
+  const PairRig rig(most, [](std::size_t i) {
+    return Pair8{static_cast<std::uint32_t>(i * 40503u + 1),
+                 static_cast<std::uint32_t>(i ^ 0x5a5a)};
+  });
+  const std::vector<Pair8>& src = rig.src;
+  Pair8* const dev = rig.dev;
+  Pair8* const stage = rig.stage;
+  ASSERT_TRUE(dev != nullptr && stage != nullptr);
   cudaStream_t s = nullptr;
   ASSERT_EQ(cudaStreamCreate(&s), cudaSuccess);
   ScopedEnv c("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");  // 512 pairs per chunk
@@ -490,8 +503,6 @@ TEST(PooledDownload, ChunksQueuedAheadServeEveryCountTheyCover) {
   }
   EXPECT_GT(pooled, 3) << "the pooled path ran";
   EXPECT_EQ(cudaStreamDestroy(s), cudaSuccess);
-  EXPECT_EQ(cudaFreeHost(stage), cudaSuccess);
-  EXPECT_EQ(cudaFree(dev), cudaSuccess);
 }
 
 TEST(PooledDownload, ThreadsKnobAndWhenThePoolRuns) {
