@@ -1,0 +1,16 @@
+#!/bin/bash
+# Device call 6 (carry .fcl-debs and .gpu-data; 600 s): the final tree (cae23ae: the forecast's
+# read-back, the download tests' rig). Runs scripts/gpu_check.sh: every CUDA test program built,
+# ctest -L cuda.
+set -u
+cd "$(dirname "$0")/../../.."
+T=$OUT/times.txt
+date > $T
+W=$OUT/gc
+OUT=$W CTEST_ALL=0 JOBS=16 \
+  TARGETS="test_cuda_query test_cuda_upload test_cuda_box_test test_cuda_device test_cuda_bvh test_cuda_warp_search test_cuda_predicates" \
+  timeout 560 scripts/gpu_check.sh > $OUT/gpu_check.log 2>&1
+echo "gpu_check rc=$?" >> $T
+grep -E "tests passed|tests failed|Failed|\*\*\*" $W/ctest.log | head -20 >> $T
+gzip $W/ctest.log $W/build.log
+date >> $T
