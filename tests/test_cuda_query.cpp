@@ -1871,8 +1871,8 @@ TYPED_TEST(CudaQueryTyped, OneTripBringsSmallHostResultsAndStepsAsideForLargeOne
   // always take one trip and do not move the rule. Then KDET_FCL_CUDA_ONE_TRIP_COPY = 2, 4, 0
   // and unset (4: kOneTripMaxChunks): results of up to that many chunks come in the trip. Fans
   // give exact pair counts: 300, 1,000 and 4,800 (80 fans of 60). Without the forecasts
-  // (KDET_FCL_CUDA_ONE_TRIP_FORECAST=0), which take the queries after a host result of the same
-  // mesh otherwise (ForecastReadsThePairsBackBehindTheCounts).
+  // (KDET_FCL_CUDA_ONE_TRIP_FORECAST=0), which otherwise take a mesh's queries after a host result
+  // of one to four chunks (ForecastReadsThePairsBackBehindTheCounts).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
