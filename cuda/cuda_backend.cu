@@ -3022,15 +3022,15 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   // waits for the counts alone and copies the chunks out of the stage as they arrive.
   const std::size_t chunk_pairs =
       std::min<std::size_t>(staging::downloadChunkElements(sizeof(TrianglePair)), 0x7FFFFFFF);
+  const bool trip_on = counting && oneTripOn();
+  // (A forecast is only taken in one trip: forecast_pairs > 0 implies one_trip.)
   const std::size_t forecast_pairs =
-      dev == nullptr && forecast != nullptr && counting && *forecast >= chunk_pairs &&
+      trip_on && dev == nullptr && forecast != nullptr && *forecast >= chunk_pairs &&
               *forecast <= kOneTripMaxChunks * chunk_pairs && oneTripForecastOn()
           ? *forecast
           : 0;
-  const bool one_trip =
-      counting && oneTripOn() &&
-      (dev != nullptr || forecast_pairs > 0 ||
-       ctx.last_host_pairs <= kOneTripMaxChunks * chunk_pairs);
+  const bool one_trip = trip_on && (dev != nullptr || forecast_pairs > 0 ||
+                                    ctx.last_host_pairs <= kOneTripMaxChunks * chunk_pairs);
   std::uint32_t copy_most = 0;
   if (one_trip && dev == nullptr && forecast_pairs == 0) {
     copy_most = static_cast<std::uint32_t>(
@@ -3097,7 +3097,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     CUDA_TRY(cudaMemcpyAsync(ctx.hostCount(), w, kPairCountWords * sizeof(unsigned long long),
                              cudaMemcpyDeviceToHost, s));
     pending.enqueue();  // the BuildInfo of meshes re-hashed without read-back, same sync
-    if (one_trip && forecast_pairs > 0) {
+    if (forecast_pairs > 0) {
       // The forecast's read-back behind the counts (a pass that must rerun, or whose pairs are
       // more, drains it below); the host waits for the counts alone.
       ahead_pairs = forecastPairs(forecast_pairs, cap);
