@@ -671,6 +671,51 @@ struct PairSink {
   /// A candidate sink of the warp-wide phase 1 (the warp scans, the cells' pairs): its kernels
   /// stage their pairs in shared memory (stagePair; KDET_FCL_CUDA_STAGE_PAIRS).
   bool staged = false;
+  /// The bytes of a stored key: 8 (`pairs` holds 64-bit keys), or, for candidates whose key fits
+  /// in 40 bits (candidateKeyBytes), 5 or 4: `pairs` then holds `capacity` 32-bit words (the
+  /// keys' low bits), followed, for 5, by `hi`, the keys' bits 32 to 39, one byte per key.
+  int key_bytes = 8;
+  unsigned char* hi = nullptr;
+};
+
+/// Stores key `key` at place idx (< out.capacity) of the sink, in its layout (key_bytes).
+__device__ __forceinline__ void storeKey(const PairSink& out, unsigned long long idx,
+                                         unsigned long long key) {
+  if (out.key_bytes == 8) {
+    out.pairs[idx] = key;
+    return;
+  }
+  reinterpret_cast<std::uint32_t*>(out.pairs)[idx] = static_cast<std::uint32_t>(key);
+  if (out.key_bytes == 5) out.hi[idx] = static_cast<unsigned char>(key >> 32);
+}
+
+/// The keys a sink received, as the plane filter and the exact kernels read them: the first
+/// min(*count, capacity), each as (a << 32) | b whatever the sink's layout and b_bits.
+struct PairKeys {
+  const unsigned long long* pairs;
+  const unsigned long long* count;
+  unsigned long long capacity;
+  const unsigned char* hi;
+  int key_bytes;
+  int b_bits;
+
+  __host__ static PairKeys of(const PairSink& s) {
+    return PairKeys{s.pairs, s.count, s.capacity, s.hi, s.key_bytes, s.b_bits};
+  }
+  __device__ __forceinline__ unsigned long long size() const {
+    return *count < capacity ? *count : capacity;
+  }
+  __device__ __forceinline__ unsigned long long at(unsigned long long k) const {
+    unsigned long long key;
+    if (key_bytes == 8) {
+      key = __ldg(pairs + k);
+      if (b_bits == 32) return key;
+    } else {
+      key = __ldg(reinterpret_cast<const std::uint32_t*>(pairs) + k);
+      if (key_bytes == 5) key |= static_cast<unsigned long long>(__ldg(hi + k)) << 32;
+    }
+    return (key >> b_bits) << 32 | (key & ((1ull << b_bits) - 1));
+  }
 };
 
 /// Counts pair (a, .) in its segment when the sink's pairs are ordered by counting.
@@ -683,7 +728,7 @@ __device__ __forceinline__ void emitPair(const PairSink& out, std::uint32_t a, s
   // One atomic per group of threads emitting together (they are usually a warp's worth).
   const unsigned long long idx = groupIncrement(out.count, cg::coalesced_threads());
   if (idx < out.capacity)
-    out.pairs[idx] = (static_cast<unsigned long long>(a) << out.b_bits) | b;
+    storeKey(out, idx, (static_cast<unsigned long long>(a) << out.b_bits) | b);
   countSegment(out, a);
 }
 
@@ -706,7 +751,7 @@ __device__ __forceinline__ void moveStaged(const PairSink& out, const PairStage&
   unsigned long long base = 0;
   if (lane == 0) base = atomicAdd(out.count, static_cast<unsigned long long>(n));
   base = __shfl_sync(0xFFFFFFFFu, base, 0);
-  if (lane < n && base + lane < out.capacity) out.pairs[base + lane] = st.keys[lane];
+  if (lane < n && base + lane < out.capacity) storeKey(out, base + lane, st.keys[lane]);
 }
 
 /// Emits (a, b) from each lane whose `hit` is set, as emitPair does, through the warp's stage.
@@ -1271,14 +1316,13 @@ __global__ void __launch_bounds__(kQueryBlock, MB)
 /// test uses A's vertices mapped into B's frame (`va`) and B's own vertices, as on the CPU.
 template <class S, class K>
 __global__ void __launch_bounds__(kQueryBlock)
-    interExactKernel(const unsigned long long* __restrict__ cand, const unsigned long long* count,
-                     unsigned long long capacity, const Vec3<S>* __restrict__ va,
+    interExactKernel(PairKeys cand, const Vec3<S>* __restrict__ va,
                      const std::uint32_t* __restrict__ ta, const Vec3<S>* __restrict__ vb,
                      const std::uint32_t* __restrict__ tb, PairSink out) {
-  const unsigned long long m = *count < capacity ? *count : capacity;
+  const unsigned long long m = cand.size();
   const SpreadIndex at = spreadIndex();
   for (unsigned long long k = at.first; k < m; k += at.stride) {
-    const unsigned long long c = cand[k];
+    const unsigned long long c = cand.at(k);
     const auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
     if (detail::trianglesIntersectWith<K>(va[ta[3 * i]], va[ta[3 * i + 1]], va[ta[3 * i + 2]],
                                           vb[tb[3 * j]], vb[tb[3 * j + 1]], vb[tb[3 * j + 2]]))
@@ -1309,14 +1353,13 @@ __device__ __forceinline__ void emitSelfPair(const PairSink& out, std::uint32_t 
 /// that the sort puts the three lists one after the other (runQuery deals them out).
 template <class S, class K>
 __global__ void __launch_bounds__(kQueryBlock)
-    selfExactKernel(const unsigned long long* __restrict__ cand, const unsigned long long* count,
-                    unsigned long long capacity, const Vec3<S>* __restrict__ v,
+    selfExactKernel(PairKeys cand, const Vec3<S>* __restrict__ v,
                     const std::uint32_t* __restrict__ t, std::uint32_t split, int cat_shift,
                     PairSink out) {
-  const unsigned long long m = *count < capacity ? *count : capacity;
+  const unsigned long long m = cand.size();
   const SpreadIndex at = spreadIndex();
   for (unsigned long long k = at.first; k < m; k += at.stride) {
-    const unsigned long long c = cand[k];
+    const unsigned long long c = cand.at(k);
     auto i = static_cast<std::uint32_t>(c >> 32), j = static_cast<std::uint32_t>(c);
     const bool same = sameMesh(split, i, j);
     if (!same && i > j) {
@@ -1400,16 +1443,15 @@ __device__ __forceinline__ void emitVerdict(detail::FilterVerdict v, std::uint32
 /// registers, a few spills; 1: uncapped, ~80 registers; 3: the deciding filter's default).
 template <class S, int MB, bool kDecide>
 __global__ void __launch_bounds__(kFilterBlock, MB)
-    planeFilterKernel(const unsigned long long* __restrict__ cand,
-                      const unsigned long long* count, unsigned long long capacity,
-                      const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
+    planeFilterKernel(PairKeys cand, const Vec3<S>* __restrict__ va,
+                      const std::uint32_t* __restrict__ ta,
                       const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
                       PairSink surv, PairSink out, bool self, std::uint32_t split,
                       int cat_shift) {
-  const unsigned long long m = *count < capacity ? *count : capacity;
+  const unsigned long long m = cand.size();
   for (unsigned long long k = blockIdx.x * blockDim.x + threadIdx.x; k < m;
        k += gridDim.x * blockDim.x) {
-    const unsigned long long c = cand[k];
+    const unsigned long long c = cand.at(k);
     if constexpr (kDecide) {
       withPairVertices(c, va, ta, vb, tb, [&](std::uint32_t i, std::uint32_t j, const auto&... v) {
         emitVerdict(detail::trianglesFilterVerdict(v...), i, j, surv, out, self, split,
@@ -1436,9 +1478,8 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
 /// grid is the resident blocks (launchPlaneFilter), so that a warp takes many pairs.
 template <class S, int MB>
 __global__ void __launch_bounds__(kFilterBlock, MB)
-    planeFilterQueuedKernel(const unsigned long long* __restrict__ cand,
-                            const unsigned long long* count, unsigned long long capacity,
-                            const Vec3<S>* __restrict__ va, const std::uint32_t* __restrict__ ta,
+    planeFilterQueuedKernel(PairKeys cand, const Vec3<S>* __restrict__ va,
+                            const std::uint32_t* __restrict__ ta,
                             const Vec3<S>* __restrict__ vb, const std::uint32_t* __restrict__ tb,
                             PairSink surv, PairSink out, bool self, std::uint32_t split,
                             int cat_shift) {
@@ -1448,7 +1489,7 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
   unsigned long long* const qk = queue_keys[threadIdx.x >> 5];
   unsigned char* const qs = queue_signs[threadIdx.x >> 5];
   const unsigned int lane = threadIdx.x & 31u;
-  const unsigned long long m = *count < capacity ? *count : capacity;
+  const unsigned long long m = cand.size();
   // The last step of pair c whose signs are `bits` (bit k: sp[k] > 0, bit 3 + k: sq[k] > 0).
   const auto finish = [&](unsigned long long c, unsigned int bits) {
     int sp[3], sq[3];
@@ -1471,7 +1512,7 @@ __global__ void __launch_bounds__(kFilterBlock, MB)
     unsigned int bits = 0;
     unsigned long long c = 0;
     if (k < m) {
-      c = cand[k];
+      c = cand.at(k);
       withPairVertices(c, va, ta, vb, tb, [&](std::uint32_t i, std::uint32_t j, const auto&... v) {
         int sp[3], sq[3];
         detail::FilterVerdict verdict;
@@ -2817,19 +2858,43 @@ unsigned int segmentMax() {
                                                       kSegmentMaxLimit, kSegmentMax));
 }
 
-/// The candidates one round of a query may hold per query triangle (KDET_FCL_CUDA_ROUND_CANDIDATES
-/// = k from 0 to 2^20, read at every query; default 14; 0: no limit). A query whose phase 1
-/// gives more (two near-coincident cloth frames hashed as one give 21 per triangle) runs its
-/// tasks in rounds that reuse the candidate buffer, so that the buffer holds about k per
-/// triangle (8 bytes each), not all of them (runQuery). Each extra round costs time (on an H100,
-/// 0.3 ms on those two frames: benchmarks/RESULTS-gpu.md); 14 keeps them under 256 bytes per
-/// triangle with two rounds. Without the knob the limit is at least 2^16 candidates; with it,
-/// exactly k per triangle (tests force many rounds on small meshes).
-std::size_t roundCandidateLimit(std::size_t work) {
+/// Whether candidates are stored in fewer than 8 bytes where their key fits
+/// (candidateKeyBytes): KDET_FCL_CUDA_PACKED_CANDIDATES unset or 1, or 0 (always 8). Read at
+/// every query, so tests and benchmarks can compare the two; both give the same candidates.
+bool packedCandidates() { return detail::switchKnob("KDET_FCL_CUDA_PACKED_CANDIDATES", true); }
+
+/// The bytes of a stored candidate of a query whose keys (a << b_bits) | b take a_bits + b_bits
+/// bits: 4 up to 32 bits (meshes of up to 65,536 triangles), 5 up to 40 (up to 1,048,576), else
+/// 8; always 8 when not `packed`. Fewer bytes let one round hold more candidates under the
+/// same memory (roundCandidateLimit), and phase 1 writes and the plane filter reads fewer.
+constexpr int candidateKeyBytes(int a_bits, int b_bits, bool packed) {
+  return !packed || a_bits + b_bits > 40 ? 8 : a_bits + b_bits > 32 ? 5 : 4;
+}
+
+/// The candidates of key_bytes bytes that `words` 64-bit words hold (PairSink's layouts), and
+/// the words that hold n of them.
+constexpr std::size_t candidatesIn(std::size_t words, int key_bytes) {
+  return words * 8 / static_cast<std::size_t>(key_bytes);
+}
+constexpr std::size_t candidateWords(std::size_t n, int key_bytes) {
+  return (n * static_cast<std::size_t>(key_bytes) + 7) / 8;
+}
+
+/// The candidates one round of a query may hold (KDET_FCL_CUDA_ROUND_CANDIDATES = k from 0 to
+/// 2^20 per query triangle, read at every query; 0: no limit). A query whose phase 1 gives more
+/// runs its tasks in rounds that reuse the candidate buffer, so that the buffer holds about the
+/// limit, not all of them (runQuery). Each extra round costs time (on an H100, 0.13 ms on two
+/// near-coincident cloth frames hashed as one: benchmarks/RESULTS-gpu.md). By default the
+/// buffer may take 112 bytes per query triangle (at least 2^19 bytes): 14 candidates of 8 bytes,
+/// 22 of 5 (those two frames' 21 in one round), 28 of 4; that keeps every scene of the
+/// benchmark under 256 bytes per triangle. With the knob, exactly k candidates per triangle,
+/// whatever their bytes (tests force many rounds on small meshes).
+std::size_t roundCandidateLimit(std::size_t work, int key_bytes) {
   constexpr std::uint64_t kUnset = ~std::uint64_t(0);
   const std::uint64_t k =
       detail::numberKnob("KDET_FCL_CUDA_ROUND_CANDIDATES", 0, 1u << 20, kUnset);
-  if (k == kUnset) return std::max<std::size_t>(std::size_t(1) << 16, 14 * work);
+  if (k == kUnset)
+    return candidatesIn(std::max<std::size_t>(std::size_t(1) << 16, 14 * work), key_bytes);
   return static_cast<std::size_t>(k) * work;
 }
 
@@ -2911,12 +2976,17 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                      QueryResult* parts = nullptr, DeviceOut* dev = nullptr,
                      std::vector<TrianglePair>* keep = nullptr) {
   const cudaStream_t s = ctx.stream;
+  // The candidates' layout (PairSink::key_bytes): their keys carry b_bits for b, or 32 in 8 bytes.
+  const int key_bytes = candidateKeyBytes(a_bits, b_bits, packedCandidates());
+  const int cand_b_bits = key_bytes == 8 ? 32 : b_bits;
+  ctx.profile.candidate_key_bytes = key_bytes;
   ctx.cands.reserve(std::max<std::size_t>(std::size_t(1) << 16, 8 * work));
   ctx.pairs.reserve(std::max<std::size_t>(std::size_t(1) << 16, work));
   // The survivors of the plane filter live in the buffer that later receives the sorted pairs
   // (they are dead by then, and there are never fewer survivors than pairs).
   ctx.pairs_sorted.reserve(std::max<std::size_t>(std::size_t(1) << 16, 2 * work));
-  unsigned long long cand_cap = ctx.cands.capacity(), cap = ctx.pairs.capacity();
+  unsigned long long cand_cap = candidatesIn(ctx.cands.capacity(), key_bytes);
+  unsigned long long cap = ctx.pairs.capacity();
   unsigned long long surv_cap = ctx.pairs_sorted.capacity();
   const unsigned long long knob = capacityKnob();
   if (knob > 0) {
@@ -2924,7 +2994,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     cap = std::min(cap, knob);
     surv_cap = std::min(surv_cap, knob);
   }
-  const std::size_t limit = roundCandidateLimit(work);
+  const std::size_t limit = roundCandidateLimit(work, key_bytes);
   RoundPlan plan =
       RoundPlan::make(density * double(work), first_share * density * double(work), stages, limit);
   unsigned long long n = 0;
@@ -3061,8 +3131,12 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     const std::uint32_t rounds = plan.total();
     for (std::uint32_t r = 0; r < rounds; ++r) {
       if (r > 0) ctx.markRound(r, 0);
-      filtered = launch(PairSink{ctx.cands.data(), w + kCandCount, cand_cap, 32, nullptr, 0,
-                                 nullptr, kSegmentMax, staged},
+      // (Key layouts of 4 and 5 bytes: cand_cap low words, then, for 5, cand_cap high bytes.)
+      unsigned char* const cand_hi =
+          key_bytes == 5 ? reinterpret_cast<unsigned char*>(ctx.cands.data()) + 4 * cand_cap
+                         : nullptr;
+      filtered = launch(PairSink{ctx.cands.data(), w + kCandCount, cand_cap, cand_b_bits, nullptr,
+                                 0, nullptr, kSegmentMax, staged, key_bytes, cand_hi},
                         PairSink{ctx.pairs_sorted.data(), w + kSurvCount, surv_cap, 32},
                         PairSink{ctx.pairs.data(), w + kPairCount, cap, b_bits,
                                  counting ? ctx.segs.data() : nullptr, seg_shift,
@@ -3147,11 +3221,16 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
           more.second_rounds = std::max(more.second_rounds, plan.second_rounds);
         }
         plan = more;
-        ctx.cands.reserve(limit, false);
+        ctx.cands.reserve(candidateWords(limit, key_bytes), false);
       } else {
-        ctx.cands.reserve(nc);
+        // With 1/8 slack, but no more than the limit when they fit in it (one round stays
+        // within the limit's memory).
+        const std::size_t words = candidateWords(nc, key_bytes);
+        const std::size_t most = candidateWords(limit, key_bytes);
+        const std::size_t slack = words + words / 8;
+        ctx.cands.reserve(limit > 0 && words <= most ? std::min(slack, most) : slack, false);
       }
-      cand_cap = ctx.cands.capacity();
+      cand_cap = candidatesIn(ctx.cands.capacity(), key_bytes);
     }
     if (n > cap) {
       ctx.pairs.reserve(n);
@@ -3628,8 +3707,8 @@ void launchPlaneFilter(cudaStream_t s, const PairSink& cand, const Vec3<S>* va,
                        int cat_shift, bool decides) {
   const auto blocks = static_cast<unsigned int>(8 * g_num_sms);
   const auto run = [&](auto kernel, unsigned int grid) {
-    kernel<<<grid, kFilterBlock, 0, s>>>(cand.pairs, cand.count, cand.capacity, va, ta, vb, tb,
-                                         surv, out, self, split, cat_shift);
+    kernel<<<grid, kFilterBlock, 0, s>>>(PairKeys::of(cand), va, ta, vb, tb, surv, out, self,
+                                         split, cat_shift);
   };
   const bool capped = filterMinBlocks() != 1;
   // The deciding filter, uncapped, took 107 registers (float); at 3 blocks per SM, 80 and no
@@ -3771,7 +3850,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
       interExactKernel<S, K><<<exactBlocks(interExactKernel<S, K>), kQueryBlock, 0, s>>>(
-          in.pairs, in.count, in.capacity, va, av.t, bv.v, bv.t, out);
+          PairKeys::of(in), va, av.t, bv.v, bv.t, out);
     });
     return filter;
   };
@@ -3880,7 +3959,7 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     withPredicate(options.predicate, [&](auto k) {
       using K = decltype(k);
       selfExactKernel<S, K><<<exactBlocks(selfExactKernel<S, K>), kQueryBlock, 0, s>>>(
-          in.pairs, in.count, in.capacity, mv.v, mv.t, split, bitsFor(n), out);
+          PairKeys::of(in), mv.v, mv.t, split, bitsFor(n), out);
     });
     return filter;
   };
@@ -4007,7 +4086,7 @@ void readEveryKnob() {
   (void)oneTripForecastOn();
   (void)fusedOrderBlocks();
   (void)segmentMax();
-  (void)roundCandidateLimit(1);
+  (void)roundCandidateLimit(1, 8);
   (void)tileSize();
   (void)spansFor(0);
   (void)warpScan();
@@ -4017,6 +4096,7 @@ void readEveryKnob() {
   (void)sizeByLevel();
   (void)fixedCellsKnob();
   (void)stagedPairs();
+  (void)packedCandidates();
   (void)indexAdjacency(0, 0);
   (void)selfCellPairs(0, false);
   (void)selfOverlap();

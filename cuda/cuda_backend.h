@@ -221,6 +221,8 @@ struct QueryProfile {
                           ///< the scan's (0: every round ran both; a self query with cells)
   std::size_t pairs = 0;  ///< pairs found (before max_pairs truncation)
   std::size_t candidates = 0;  ///< candidate pairs of phase 1 (before the plane filter)
+  int candidate_key_bytes = 0;  ///< bytes each candidate took in the candidate buffer: 4 or 5
+                                ///< where its key fits (KDET_FCL_CUDA_PACKED_CANDIDATES), else 8
   std::size_t exact_tests = 0;  ///< pairs that reached the exact kernel (after the plane filter;
                                 ///< with filter_decides, only those its filters left undecided)
   int rehashes_async = 0;       ///< device re-hashes without a host read-back
