@@ -440,8 +440,9 @@ Row runScene(const BScene& sc, const Config& cfg) {
   kdetGpuFrame(0, nullptr, &first, nullptr);
   cuda::setProfiling(false);
   r.bytes_per_tri = double(cuda::deviceBytesInUse()) / double(r.triangles);
-  std::fprintf(stderr, "[%s] device memory %.0f B/tri (rounds %d): %s\n", sc.id.c_str(),
-               r.bytes_per_tri, first.rounds, cuda::deviceMemoryReport().c_str());
+  std::fprintf(stderr, "[%s] device memory %.0f B/tri (rounds %d, candidates of %d bytes): %s\n",
+               sc.id.c_str(), r.bytes_per_tri, first.rounds, first.candidate_key_bytes,
+               cuda::deviceMemoryReport().c_str());
 
   kdet_bvh::DevicePairBuffer dev_pairs;  // kDet's pairs left on the device
 

@@ -2858,17 +2858,22 @@ unsigned int segmentMax() {
                                                       kSegmentMaxLimit, kSegmentMax));
 }
 
-/// Whether candidates are stored in fewer than 8 bytes where their key fits
-/// (candidateKeyBytes): KDET_FCL_CUDA_PACKED_CANDIDATES unset or 1, or 0 (always 8). Read at
-/// every query, so tests and benchmarks can compare the two; both give the same candidates.
-bool packedCandidates() { return detail::switchKnob("KDET_FCL_CUDA_PACKED_CANDIDATES", true); }
+/// When a query stores its candidates in fewer than 8 bytes where their key fits
+/// (candidateKeyBytes): KDET_FCL_CUDA_PACKED_CANDIDATES = 1 (the default) only when its
+/// candidates, forecast from the last query of its kind on its meshes, would take more than one
+/// round at 8 bytes each (runQuery); 2 always (tests); 0 never. Read at every query, so tests and
+/// benchmarks can compare them; all give the same candidates. H100: the two cloth-ball frames
+/// hashed as one then take one round instead of two, 0.11 ms faster; queries of one round at 8
+/// bytes gained nothing from fewer bytes (benchmarks/RESULTS-gpu.md).
+int packedCandidates() {
+  return static_cast<int>(detail::numberKnob("KDET_FCL_CUDA_PACKED_CANDIDATES", 0, 2, 1));
+}
 
 /// The bytes of a stored candidate of a query whose keys (a << b_bits) | b take a_bits + b_bits
 /// bits: 4 up to 32 bits (meshes of up to 65,536 triangles), 5 up to 40 (up to 1,048,576), else
-/// 8; always 8 when not `packed`. Fewer bytes let one round hold more candidates under the
-/// same memory (roundCandidateLimit), and phase 1 writes and the plane filter reads fewer.
-constexpr int candidateKeyBytes(int a_bits, int b_bits, bool packed) {
-  return !packed || a_bits + b_bits > 40 ? 8 : a_bits + b_bits > 32 ? 5 : 4;
+/// 8. Fewer bytes let one round hold more candidates in the same memory (roundCandidateLimit).
+constexpr int candidateKeyBytes(int a_bits, int b_bits) {
+  return a_bits + b_bits > 40 ? 8 : a_bits + b_bits > 32 ? 5 : 4;
 }
 
 /// The candidates of key_bytes bytes that `words` 64-bit words hold (PairSink's layouts), and
@@ -2976,8 +2981,13 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                      QueryResult* parts = nullptr, DeviceOut* dev = nullptr,
                      std::vector<TrianglePair>* keep = nullptr) {
   const cudaStream_t s = ctx.stream;
-  // The candidates' layout (PairSink::key_bytes): their keys carry b_bits for b, or 32 in 8 bytes.
-  const int key_bytes = candidateKeyBytes(a_bits, b_bits, packedCandidates());
+  // The candidates' layout (PairSink::key_bytes; packedCandidates): their keys carry b_bits for
+  // b, or 32 in 8 bytes.
+  const int packing = packedCandidates();
+  const bool packed =
+      packing == 2 || (packing == 1 && roundsFor(density * double(work),
+                                                 roundCandidateLimit(work, 8)) > 1);
+  const int key_bytes = packed ? candidateKeyBytes(a_bits, b_bits) : 8;
   const int cand_b_bits = key_bytes == 8 ? 32 : b_bits;
   ctx.profile.candidate_key_bytes = key_bytes;
   ctx.cands.reserve(std::max<std::size_t>(std::size_t(1) << 16, 8 * work));

@@ -414,7 +414,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_SIZE_BY_LEVEL", on_off, not_on_off},
       {"KDET_FCL_CUDA_FIXED_CELLS", on_off, not_on_off},
       {"KDET_FCL_CUDA_STAGE_PAIRS", on_off, not_on_off},
-      {"KDET_FCL_CUDA_PACKED_CANDIDATES", on_off, not_on_off},
+      {"KDET_FCL_CUDA_PACKED_CANDIDATES", {"0", "1", "2"}, {"3", "-1", "yes"}},
       {"KDET_FCL_CUDA_INDEX_ADJACENCY", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_CELLS", on_off, not_on_off},
       {"KDET_FCL_CUDA_SELF_OVERLAP", on_off, not_on_off},
@@ -606,11 +606,12 @@ TEST(CudaQuery, UncClothBallAndFunnelFrames) {
 
 TEST(CudaQuery, TwoClothBallFramesAsOneTakeOneRoundUnder256BytesPerTriangle) {
   // Memory, not time. The joint query of two UNC cloth-ball frames (184,460 triangles, about 21
-  // candidates per triangle) stores its candidates in 5 bytes each
-  // (KDET_FCL_CUDA_PACKED_CANDIDATES), so they fit in one round within the candidate buffer's
-  // default limit (112 bytes per triangle), where 8 bytes each take two. Both forms stay within
-  // issue 4's 256 bytes per triangle (after a first query from no device memory, as gpu_bench
-  // measures) and give the three CPU queries' pairs; the second query is planned from the first.
+  // candidates per triangle) would take two rounds of 8-byte candidates within the candidate
+  // buffer's default limit (112 bytes per triangle), so it stores them in 5 bytes each
+  // (KDET_FCL_CUDA_PACKED_CANDIDATES=1, the default, from the second query on, once the first
+  // has told the candidates; 2: from the first; 0: never), and they fit in one round. Every form
+  // stays within issue 4's 256 bytes per triangle (after each query, the first from no device
+  // memory, as gpu_bench measures) and gives the three CPU queries' pairs.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   const std::string f92 = sharedData("unc/cloth-ball/cloth_ball92.ply");
@@ -622,10 +623,9 @@ TEST(CudaQuery, TwoClothBallFramesAsOneTakeOneRoundUnder256BytesPerTriangle) {
                                   inter = sorted(intersectMeshes(a, b).pairs);
   const double triangles = double(a.numTriangles() + b.numTriangles());
   cuda::setProfiling(true);
-  for (const char* packed : {"0", "1"}) {
-    kdet_test::ScopedEnv knob("KDET_FCL_CUDA_PACKED_CANDIDATES", packed);
-    const bool five = *packed == '1';
-    const std::string what = std::string("KDET_FCL_CUDA_PACKED_CANDIDATES=") + packed;
+  for (const char* packing : {"0", "1", "2"}) {
+    kdet_test::ScopedEnv knob("KDET_FCL_CUDA_PACKED_CANDIDATES", packing);
+    const std::string what = std::string("KDET_FCL_CUDA_PACKED_CANDIDATES=") + packing;
     cuda::releaseDeviceMemory();
     for (int k = 0; k < 2; ++k) {
       cuda::markDeformed(a);
@@ -638,13 +638,14 @@ TEST(CudaQuery, TwoClothBallFramesAsOneTakeOneRoundUnder256BytesPerTriangle) {
       EXPECT_EQ(all.self_a.pairs, self_a) << at;
       EXPECT_EQ(all.self_b.pairs, self_b) << at;
       EXPECT_EQ(all.inter.pairs, inter) << at;
+      const bool five = *packing == '2' || (*packing == '1' && k == 1);
       EXPECT_EQ(p.candidate_key_bytes, five ? 5 : 8) << at;
       EXPECT_GT(p.candidates, std::size_t(20 * triangles)) << at;
-      if (k == 0) {
-        EXPECT_LE(per_tri, 256.0) << at << ": " << cuda::deviceMemoryReport();
-        std::cout << "[ memory   ] " << at << ": " << p.candidates << " candidates, "
-                  << p.rounds << " round(s), " << per_tri << " B/triangle\n";
-      } else {
+      EXPECT_LE(per_tri, 256.0) << at << ": " << cuda::deviceMemoryReport();
+      std::cout << "[ memory   ] " << at << ": " << p.candidates << " candidates in "
+                << p.candidate_key_bytes << " bytes each, " << p.rounds << " round(s), "
+                << p.passes << " pass(es), " << per_tri << " B/triangle\n";
+      if (k == 1) {
         EXPECT_EQ(p.passes, 1) << at;
         EXPECT_EQ(p.rounds, five ? 1 : 2) << at;
       }
@@ -2367,16 +2368,17 @@ TYPED_TEST(CudaQueryTyped, QueriesInRoundsFindTheSameCandidatesAndPairsInLessMem
 }
 
 TYPED_TEST(CudaQueryTyped, CandidatesInFourOrFiveBytesAreTheEightByteCandidates) {
-  // A candidate whose key (a << b_bits) | b fits in 32 or 40 bits is stored in 4 or 5 bytes
-  // (KDET_FCL_CUDA_PACKED_CANDIDATES, default on; 0: 8 bytes, as before). Every query kind must
-  // give the 8-byte query's candidates, exact tests and pairs, and the CPU's pairs: self queries
-  // of a cloth of fewer than 65,536 triangles (4 bytes) and of more (5), an inter query of two
-  // soups (4) and the joint query of two cloth frames of 67,600 triangles together (5). Through
-  // every writer and reader of the candidates: the warp scans staged or not
+  // A candidate whose key (a << b_bits) | b fits in 32 or 40 bits may be stored in 4 or 5 bytes
+  // (KDET_FCL_CUDA_PACKED_CANDIDATES=2: always; 1, the default: only when the query's forecast
+  // candidates would take more than one round at 8 bytes; 0: never). Every query kind must give
+  // the 8-byte query's candidates, exact tests and pairs, and the CPU's pairs: self queries of a
+  // cloth of fewer than 65,536 triangles (4 bytes) and of more (5), an inter query of two soups
+  // (4) and the joint query of two cloth frames of 67,600 triangles together (5). Through every
+  // writer and reader of the candidates: the warp scans staged or not
   // (KDET_FCL_CUDA_STAGE_PAIRS), the tile scan, the queued, per-pair and dropping-only plane
   // filters, no filter (the exact kernel reads the candidates), a first pass capped at 3 pairs
   // (the high bytes then start after the capped capacity) and rounds of one candidate per
-  // triangle.
+  // triangle (where the default packs too: more than one round at 8 bytes).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -2433,16 +2435,23 @@ TYPED_TEST(CudaQueryTyped, CandidatesInFourOrFiveBytesAreTheEightByteCandidates)
         wide = cuda::lastQueryProfile();
       }
       EXPECT_EQ(wide.candidate_key_bytes, 8) << what;
-      EXPECT_EQ(gpu[q](), cpu[q]) << what;
-      const cuda::QueryProfile p = cuda::lastQueryProfile();
-      EXPECT_EQ(p.candidate_key_bytes, bytes[q]) << what;
-      EXPECT_GT(p.candidates, 0u) << what;
-      EXPECT_EQ(p.candidates, wide.candidates) << what;
-      EXPECT_EQ(p.exact_tests, wide.exact_tests) << what;
-      if (c.value != nullptr && std::string(c.name) == "KDET_FCL_CUDA_PAIR_CAPACITY")
-        EXPECT_GE(p.passes, 2) << what << ": the overflow path did not run";
-      if (c.value != nullptr && std::string(c.name) == "KDET_FCL_CUDA_ROUND_CANDIDATES")
-        EXPECT_GT(p.rounds, 1) << what;
+      const bool rounds =
+          c.value != nullptr && std::string(c.name) == "KDET_FCL_CUDA_ROUND_CANDIDATES";
+      for (const char* packing : {"2", "1"}) {
+        kdet_test::ScopedEnv packed("KDET_FCL_CUDA_PACKED_CANDIDATES", packing);
+        const std::string at = what + ", packing " + packing;
+        EXPECT_EQ(gpu[q](), cpu[q]) << at;
+        const cuda::QueryProfile p = cuda::lastQueryProfile();
+        // The default packs where the 8-byte query took rounds (planned from the same count).
+        EXPECT_EQ(p.candidate_key_bytes, *packing == '2' || wide.rounds > 1 ? bytes[q] : 8) << at;
+        if (rounds) EXPECT_GT(wide.rounds, 1) << at;
+        EXPECT_GT(p.candidates, 0u) << at;
+        EXPECT_EQ(p.candidates, wide.candidates) << at;
+        EXPECT_EQ(p.exact_tests, wide.exact_tests) << at;
+        if (c.value != nullptr && std::string(c.name) == "KDET_FCL_CUDA_PAIR_CAPACITY")
+          EXPECT_GE(p.passes, 2) << at << ": the overflow path did not run";
+        if (rounds) EXPECT_GT(p.rounds, 1) << at;
+      }
     }
   }
   cuda::setProfiling(false);
