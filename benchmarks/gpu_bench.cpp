@@ -267,6 +267,7 @@ Row runScene(const BScene& sc, const Config& cfg) {
       prof->total_ms += p.total_ms;
       prof->candidates += p.candidates;
       prof->rounds = std::max(prof->rounds, p.rounds);
+      prof->candidate_key_bytes = std::max(prof->candidate_key_bytes, p.candidate_key_bytes);
     };
     auto take = [&](const QueryResult& q) {
       n += q.pairs.size();
@@ -434,13 +435,15 @@ Row runScene(const BScene& sc, const Config& cfg) {
   };
 
   // Device memory of one frame: the caches of frame 0's meshes plus the backend's scratch (and
-  // the most rounds one of its queries took: cuda::QueryProfile::rounds).
+  // the most rounds one of its queries took, cuda::QueryProfile::rounds, and the most bytes a
+  // candidate took: a first frame has no forecast to pack its candidates by).
   cuda::setProfiling(true);
   cuda::QueryProfile first;
   kdetGpuFrame(0, nullptr, &first, nullptr);
   cuda::setProfiling(false);
   r.bytes_per_tri = double(cuda::deviceBytesInUse()) / double(r.triangles);
-  std::fprintf(stderr, "[%s] device memory %.0f B/tri (rounds %d, candidates of %d bytes): %s\n",
+  std::fprintf(stderr,
+               "[%s] device memory %.0f B/tri (first frame: rounds %d, %d-byte candidates): %s\n",
                sc.id.c_str(), r.bytes_per_tri, first.rounds, first.candidate_key_bytes,
                cuda::deviceMemoryReport().c_str());
 
