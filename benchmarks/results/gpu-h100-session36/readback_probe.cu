@@ -4,8 +4,11 @@
 //   chunks   the same in 256 KiB chunks, an event after each, the host waiting for the last
 //   copy1/4  the host's memcpy of 3.6 MB from the page-locked stage into a kept (faulted-in)
 //            std::vector, by 1 or 4 OpenMP threads
-//   piped4   chunks queued at once, 4 OpenMP threads each waiting for its chunks' events and
+//   pipedN   chunks queued at once, N OpenMP threads each waiting for its chunks' events and
 //            copying them out as they land (the library's pooled read-back, in miniature)
+//   dma+cpN  (call 4) the whole DMA, then the copy by N threads
+//   piped4q  piped4 with each thread polling its chunk's event (cudaEventQuery)
+//   piped4m  1 MiB chunks, each copied by the 4 threads in quarters
 // Build: nvcc -O3 -arch=sm_90 -Xcompiler -fopenmp readback_probe.cu -o readback_probe
 #include <cuda_runtime.h>
 #include <omp.h>
@@ -103,6 +106,48 @@ int main() {
       }
     });
   }
+  // (call 4) The whole DMA first, then the copy by 4, 8 or 16 threads; and the pipelined form
+  // with 1 MiB chunks, or with each thread polling its chunk's event (cudaEventQuery).
+  for (int threads : {4, 8, 16}) {
+    char name[16];
+    std::snprintf(name, sizeof name, "dma+cp%d", threads);
+    run(name, [&] {
+      cudaMemcpyAsync(stage, dev, bytes, cudaMemcpyDeviceToHost, s);
+      cudaEventRecord(ev[0], s);
+      cudaEventSynchronize(ev[0]);
+      copyOut(threads);
+    });
+  }
+  run("piped4q", [&] {
+    enqueueChunks();
+#pragma omp parallel for num_threads(4) schedule(dynamic, 1)
+    for (long c = 0; c < long(chunks); ++c) {
+      while (cudaEventQuery(ev[c]) == cudaErrorNotReady) {
+      }
+      const std::size_t off = c * chunk, len = std::min(chunk, bytes - off);
+      std::memcpy(reinterpret_cast<char*>(dst.data()) + off,
+                  reinterpret_cast<char*>(stage) + off, len);
+    }
+  });
+  const std::size_t big = 1024 * 1024, bigs = (bytes + big - 1) / big;
+  run("piped4m", [&] {
+    for (std::size_t c = 0; c < bigs; ++c) {
+      const std::size_t off = c * big, len = std::min(big, bytes - off);
+      cudaMemcpyAsync(reinterpret_cast<char*>(stage) + off, reinterpret_cast<char*>(dev) + off,
+                      len, cudaMemcpyDeviceToHost, s);
+      cudaEventRecord(ev[c], s);
+    }
+#pragma omp parallel for num_threads(4) schedule(static, 1)
+    for (long t = 0; t < 4 * long(bigs); ++t) {  // each chunk's quarters by 4 threads
+      const long c = t / 4, q = t % 4;
+      cudaEventSynchronize(ev[c]);
+      const std::size_t off = c * big, len = std::min(big, bytes - off);
+      const std::size_t part = (len / 4 + 7) & ~std::size_t(7);
+      const std::size_t a = std::min(len, q * part), b = std::min(len, a + part);
+      std::memcpy(reinterpret_cast<char*>(dst.data()) + off + a,
+                  reinterpret_cast<char*>(stage) + off + a, b - a);
+    }
+  });
   std::printf("check %llu\n", static_cast<unsigned long long>(dst[n / 2]));
   return 0;
 }
