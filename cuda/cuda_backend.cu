@@ -4085,7 +4085,6 @@ void readEveryKnob() {
   (void)rehashGraphOn();
   (void)countBuildOn(0);
   (void)staging::pinVerticesOn();
-  (void)staging::downloadSplit();
   (void)upperLevelsFor(0);
   (void)capacityKnob();
   (void)planeFilterOn();

@@ -35,9 +35,7 @@
 // KDET_FCL_CUDA_UPLOAD_THREADS=n (1..64) forces the number of host threads (1: one thread,
 // still chunked); KDET_FCL_CUDA_UPLOAD_CHUNK=b (4096 bytes to 4 GiB) sets the chunk size;
 // KDET_FCL_CUDA_DOWNLOAD_CHUNK=b the same for downloads; KDET_FCL_CUDA_DOWNLOAD_THREADS=n
-// (1..64) the threads of a pooled download (1: the calling thread alone);
-// KDET_FCL_CUDA_DOWNLOAD_SPLIT=0 copies each chunk of a pooled download whole by one thread
-// (default 1: in as many pieces as threads).
+// (1..64) the threads of a pooled download (1: the calling thread alone).
 
 #include <cuda_runtime.h>
 #include <unistd.h>
@@ -321,14 +319,6 @@ inline int downloadThreads(std::size_t chunks) {
   return threadsFor("KDET_FCL_CUDA_DOWNLOAD_THREADS", kDownloadThreads, chunks);
 }
 
-/// Whether a pooled download copies each chunk in as many pieces as it has threads, so that all
-/// of them copy the chunk that has just landed (KDET_FCL_CUDA_DOWNLOAD_SPLIT unset or 1), or
-/// each chunk whole by one thread (0). Data a DMA has just written come out of the stage at
-/// about 26 GB/s by 8 threads on an H100 host, against 69 GB/s for data in the cache
-/// (benchmarks/results/gpu-h100-session36/readback_probe.cu): the copy, not the bus, bounds a
-/// large read-back, and a chunk copied whole leaves a thread alone on the last one.
-inline bool downloadSplit() { return detail::switchKnob("KDET_FCL_CUDA_DOWNLOAD_SPLIT", true); }
-
 /// A pooled download pays for its threads only from this many chunks on (4: 1 MiB with the
 /// default chunk; 61,530 pairs, 0.5 MB, gained nothing from threads).
 constexpr std::size_t kPooledDownloadMinChunks = 4;
@@ -412,9 +402,8 @@ class CopyPool {
 /// on the calling thread once the first chunk has arrived (so that what the stream copied before
 /// it, such as counts, is there: the caller sizes its destinations then; it may throw, and the
 /// transfers have run when the exception leaves); then `threads` threads of `pool` (the calling
-/// one included) take the chunks in order, each chunk in `threads` pieces (downloadSplit; else
-/// whole), each thread waiting for its piece's chunk's event and calling
-/// `place(offset, first, n)`: the piece's n elements at `first` (in the stage) are those from
+/// one included) take the chunks, each waiting for its chunk's event and calling
+/// `place(offset, first, n)`: the chunk's n elements at `first` (in the stage) are those from
 /// element `offset` on. place is called concurrently for disjoint ranges and must not throw.
 /// Returns the first CUDA error, or cudaSuccess; the transfers have run when it returns (those of
 /// `ahead` when its owner drains it). For count 0 no CUDA call is made, and neither ready nor
@@ -432,17 +421,14 @@ cudaError_t pooledDownload(const T* src, std::size_t count, T* stage, cudaStream
   if (err != cudaSuccess) return err;
   ready();
   const std::size_t chunk = events->chunk, chunks = (count + chunk - 1) / chunk;
-  // Work units: each chunk in `pieces` pieces (downloadSplit), taken in order.
-  const std::size_t pieces = downloadSplit() ? static_cast<std::size_t>(std::max(threads, 1)) : 1;
   std::atomic<std::size_t> next{0};
   std::atomic<bool> failed{false};
   std::mutex error_mutex;
   cudaError_t error = cudaSuccess;
   const std::function<void()> work = [&] {
     while (!failed.load(std::memory_order_relaxed)) {
-      const std::size_t u = next.fetch_add(1);
-      if (u >= chunks * pieces) return;
-      const std::size_t c = u / pieces, q = u % pieces;
+      const std::size_t c = next.fetch_add(1);
+      if (c >= chunks) return;
       const cudaError_t e = cudaEventSynchronize(events->ev[c]);
       if (e != cudaSuccess) {
         std::lock_guard<std::mutex> lock(error_mutex);
@@ -450,11 +436,8 @@ cudaError_t pooledDownload(const T* src, std::size_t count, T* stage, cudaStream
         failed = true;
         return;
       }
-      const std::size_t len = std::min(chunk, count - c * chunk);
-      const std::size_t piece = (len + pieces - 1) / pieces;
-      const std::size_t from = std::min(len, q * piece), to = std::min(len, from + piece);
-      const std::size_t off = c * chunk + from;
-      if (to > from) place(off, static_cast<const T*>(stage + off), to - from);
+      const std::size_t off = c * chunk;
+      place(off, static_cast<const T*>(stage + off), std::min(chunk, count - off));
     }
   };
   pool.run(threads, work);

@@ -434,7 +434,6 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_DOWNLOAD_CHUNK", {"4096", "4294967296"}, {"4095", "4294967297", "1M"}},
       {"KDET_FCL_CUDA_UPLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
       {"KDET_FCL_CUDA_DOWNLOAD_THREADS", {"1", "64"}, {"0", "65", "all"}},
-      {"KDET_FCL_CUDA_DOWNLOAD_SPLIT", on_off, not_on_off},
   };
   for (const Knob& k : knobs) {
     for (const char* unset : {static_cast<const char*>(nullptr), ""}) {
