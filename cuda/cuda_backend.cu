@@ -21,10 +21,12 @@
 // constant memory (c_info), copied device to device, so the host never needs a re-hash's grid.
 // Memory: the build's sort and count scratch is carved out of the query buffers (candidates,
 // pairs, sorted pairs), which are idle during a build; the filter's survivors use the sorted-pair
-// buffer, idle until the final sort. A query with more candidates than 14 per query
-// triangle runs phase 1, the filter and phase 2 in rounds over ranges of its tasks, which reuse
-// the candidate and survivor buffers (runQuery, RoundPlan), all queued before the one read-back;
-// a self query with the cells' pairs runs each of its two phase-1 kernels in rounds of its own.
+// buffer, idle until the final sort. A query whose candidates need more than 112 bytes per
+// query triangle (14 of 8 bytes) runs phase 1, the filter and phase 2 in rounds over ranges of
+// its tasks, which reuse the candidate and survivor buffers (runQuery, RoundPlan), all queued
+// before the one read-back; a self query with the cells' pairs runs each of its two phase-1
+// kernels in rounds of its own. Where 8-byte candidates would take rounds and their keys fit in
+// 40 bits, they are stored in 5 bytes (4 where 32 bits do: PairSink::key_bytes), fewer rounds.
 // benchmarks/RESULTS-gpu.md has the measurements behind these choices.
 
 #include <cooperative_groups.h>
