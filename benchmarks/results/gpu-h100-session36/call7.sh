@@ -28,7 +28,6 @@ for sc in unc-cloth-ball-2frames unc-cloth-ball-self; do
   if [ $left -lt 30 ]; then echo "ncu $sc skipped (time)" >> $T; continue; fi
   echo "== $sc" >> $W/ncu.csv
   timeout $((left - 10)) $NCU --clock-control none --kernel-name-base demangled \
-    --kernel-name regex:'^((?!kdet_bvh).)*$' \
     --metrics gpu__time_duration.sum,launch__grid_size \
     --csv --print-units base $B --no-fcl --no-cpu --repeats 5 --only $sc >> $W/ncu.csv 2> $W/ncu-$sc.err
   echo "ncu $sc rc=$?" >> $T
