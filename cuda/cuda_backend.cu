@@ -2852,6 +2852,16 @@ int orderBlocksPerSm(Context& ctx) {
   return ctx.order_blocks_per_sm;
 }
 
+/// The bits of the counting order's segment index (a segment holds the pairs whose first index,
+/// with a joint query's kind above it, agrees in its top that many bits): kSegmentBits, or
+/// KDET_FCL_CUDA_COUNT_ORDER_BITS (12 .. 20). More bits: smaller segments, so fewer keys for
+/// each key's rank to read, against a larger scan of the segments' counts (4 bytes each).
+/// Read at every query.
+int segmentBits() {
+  return static_cast<int>(
+      detail::numberKnob("KDET_FCL_CUDA_COUNT_ORDER_BITS", 12, 20, kSegmentBits));
+}
+
 /// The most pairs of one segment that the counting order ranks (each pair of a segment reads the
 /// whole segment): kSegmentMax, or KDET_FCL_CUDA_COUNT_ORDER_SEGMENT (1 .. kSegmentMaxLimit).
 /// Read at every query.
@@ -3017,7 +3027,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   // shifted right to at most kSegmentBits bits.
   const bool kinds = split > 0;
   const int upper_bits = a_bits + (kinds ? 2 : 0);
-  const int seg_shift = std::max(0, upper_bits - kSegmentBits);
+  const int seg_shift = std::max(0, upper_bits - segmentBits());
   const std::size_t segments = std::size_t(1) << (upper_bits - seg_shift);
   const bool counting = countOrderAllowed();
   const unsigned int seg_max = segmentMax();
@@ -4098,6 +4108,7 @@ void readEveryKnob() {
   (void)oneTripForecastOn();
   (void)fusedOrderBlocks();
   (void)segmentMax();
+  (void)segmentBits();
   (void)roundCandidateLimit(1, 8);
   (void)tileSize();
   (void)spansFor(0);

@@ -406,6 +406,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_ONE_TRIP_FORECAST", on_off, not_on_off},
       {"KDET_FCL_CUDA_FUSED_ORDER", {"0", "1", "2", "32"}, {"33", "-1", "two"}},
       {"KDET_FCL_CUDA_COUNT_ORDER_SEGMENT", {"1", "256", "65536"}, {"0", "65537", "1k"}},
+      {"KDET_FCL_CUDA_COUNT_ORDER_BITS", {"12", "16", "20"}, {"11", "21", "x"}},
       {"KDET_FCL_CUDA_PLANE_FILTER", on_off, not_on_off},
       {"KDET_FCL_CUDA_FILTER_DECIDES", on_off, not_on_off},
       {"KDET_FCL_CUDA_FILTER_QUEUE", on_off, not_on_off},
