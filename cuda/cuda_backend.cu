@@ -99,7 +99,11 @@ enum PairCountWord : int {
 // does, when there are at least kCountOrderMinPairs pairs (cuda_backend.h) and no segment holds
 // more than kSegmentMax (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT: segmentMax()) (else the radix sort
 // runs: fewer keys fit its single-tile sort, and a segment's rank reads the whole segment).
-constexpr int kSegmentBits = 16;
+// 17 bits (512 KB of segment counts): on an H100 the two cloth-ball frames' order (445,614 pairs,
+// ncu, one launch) took 72 µs at 16 bits, whose segments of 16 first indices hold about 50
+// pairs each, and 50 µs at 18 (benchmarks/RESULTS-gpu.md); 18 bits took those frames to 255
+// B/tri, next to issue 4's 256.
+constexpr int kSegmentBits = 17;
 constexpr unsigned int kSegmentMax = 1024;
 constexpr unsigned int kSegmentMaxLimit = 65536;  // the knob's largest value
 constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
@@ -2855,8 +2859,8 @@ int orderBlocksPerSm(Context& ctx) {
 /// The bits of the counting order's segment index (a segment holds the pairs whose first index,
 /// with a joint query's kind above it, agrees in its top that many bits): kSegmentBits, or
 /// KDET_FCL_CUDA_COUNT_ORDER_BITS (12 .. 20). More bits: smaller segments, so fewer keys for
-/// each key's rank to read, against a larger scan of the segments' counts (4 bytes each).
-/// Read at every query.
+/// each key's rank to read, against a larger scan and more memory for the segments' counts (4
+/// bytes each). Read at every query.
 int segmentBits() {
   return static_cast<int>(
       detail::numberKnob("KDET_FCL_CUDA_COUNT_ORDER_BITS", 12, 20, kSegmentBits));

@@ -1514,12 +1514,16 @@ bool cameInTheTrip(const cuda::QueryProfile& p) { return p.one_trip_copy || p.fo
 
 /// The most pairs of one segment of the counting order (cuda_backend.cu): the first index of a
 /// pair of `runs[k]` (its kind k, above the bits of `triangles`' indices when there are several
-/// runs: a joint query's), shifted right to at most 16 bits.
+/// runs: a joint query's), shifted right to at most the segment bits.
 std::size_t largestSegment(const std::vector<std::vector<TrianglePair>>& runs,
                            std::size_t triangles) {
   int bits = 1;
   while ((std::size_t(1) << bits) < triangles) ++bits;
-  const int upper = bits + (runs.size() > 1 ? 2 : 0), shift = upper > 16 ? upper - 16 : 0;
+  // The segment index's bits: KDET_FCL_CUDA_COUNT_ORDER_BITS, 17 by default.
+  const char* knob = std::getenv("KDET_FCL_CUDA_COUNT_ORDER_BITS");
+  const int seg_bits = knob != nullptr ? std::atoi(knob) : 17;
+  const int upper = bits + (runs.size() > 1 ? 2 : 0);
+  const int shift = upper > seg_bits ? upper - seg_bits : 0;
   std::map<std::uint64_t, std::size_t> count;
   std::size_t most = 0;
   for (std::size_t k = 0; k < runs.size(); ++k)
@@ -1699,9 +1703,10 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // a rank within each segment) when there are at least cuda::kCountOrderMinPairs (2048) and no
   // segment holds more than 1024 (KDET_FCL_CUDA_COUNT_ORDER=1: whatever the number of pairs);
   // otherwise, and with KDET_FCL_CUDA_COUNT_ORDER=0, the radix sort orders them. The orders must
-  // be the same, on self, inter and joint queries, meshes whose segments span several first
-  // indices (more than 2^16 triangles), max_pairs, a buffer on the device smaller than the pairs,
-  // forced overflows, and fans: 1024 pairs in one segment (counted when forced), 1025 (sorted),
+  // be the same, on self, inter and joint queries, segments that span several first indices
+  // (the joint query of two meshes of 72k triangles; every query of a mesh of more than 2^12
+  // triangles in the CTest run test_cuda_query_order_bits, 12 segment bits), max_pairs, a
+  // buffer on the device smaller than the pairs, forced overflows, and fans: 1024 pairs in one segment (counted when forced), 1025 (sorted),
   // 80 fans of 60 (4,800 pairs: counted by default), 34 and 40 fans of 60 (2,040 pairs: sorted by
   // default; 2,400: counted, where the limit was 4,096 until 2026-11-24); with
   // KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=300, segments of 300 (counted when forced) and 301
@@ -1789,7 +1794,7 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
     HashedMesh<S> cloth2(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.95)));
     HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
     HashedMesh<S> big(makeDrapedCloth<S>(190, 4, 1, S(0.03), S(1.0)));
-    ASSERT_GT(big.numTriangles(), 65536u);  // 17 index bits: two first indices per segment
+    ASSERT_GT(big.numTriangles(), 65536u);  // 17 index bits (32 first indices a segment at 12)
     // (The last host result of the tests before may have been large: one trip from here on.)
     (void)selfPairs(cloth)();
     const std::vector<TrianglePair> cloth_self = checkSelf("cloth self", cloth);
@@ -1812,15 +1817,15 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
       const std::vector<TrianglePair> want =
           sorted(intersectMeshes(big, sphere, on(Backend::Cpu)).pairs);
       EXPECT_GT(want.size(), 10u);
-      const auto c = choices(want, big.numTriangles());  // two first indices per segment
+      const auto c = choices(want, big.numTriangles());
       EXPECT_EQ(orders("big cloth/sphere", c.first, c.second,
                        [&] { return intersectMeshes(big, sphere, on(Backend::Cuda)).pairs; }),
                 want);
     }
     // Joint: the three kinds, each a run in the order (the first mesh's self pairs, the second's,
     // a mark, the pairs across), by default, counted when forced, and sorted; their segments are
-    // (kind, first index) for the two small cloths, and 16 first indices of a kind for the two
-    // large ones (2 x 72k triangles).
+    // (kind, first index) for the two small cloths, and 8 first indices of a kind for the two
+    // large ones (2 x 72k triangles; at the default 17 segment bits).
     auto joint = [&](const HashedMesh<S>& a, const HashedMesh<S>& b, const std::string& what) {
       const QueryOptions cpu = on(Backend::Cpu);
       const std::vector<std::vector<TrianglePair>> runs = {
