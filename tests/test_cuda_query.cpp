@@ -1703,24 +1703,23 @@ TYPED_TEST(CudaQueryTyped, PairsAreOrderedByCountingAsTheRadixSortOrdersThem) {
   // a rank within each segment) when there are at least cuda::kCountOrderMinPairs (2048) and no
   // segment holds more than 1024 (KDET_FCL_CUDA_COUNT_ORDER=1: whatever the number of pairs);
   // otherwise, and with KDET_FCL_CUDA_COUNT_ORDER=0, the radix sort orders them. The orders must
-  // be the same, on self, inter and joint queries, segments that span several first indices
-  // (the joint query of two meshes of 72k triangles; every query of a mesh of more than 2^12
-  // triangles in the CTest run test_cuda_query_order_bits, 12 segment bits), max_pairs, a
-  // buffer on the device smaller than the pairs, forced overflows, and fans: 1024 pairs in one segment (counted when forced), 1025 (sorted),
-  // 80 fans of 60 (4,800 pairs: counted by default), 34 and 40 fans of 60 (2,040 pairs: sorted by
-  // default; 2,400: counted, where the limit was 4,096 until 2026-11-24); with
-  // KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=300, segments of 300 (counted when forced) and 301
-  // (sorted), and 20 fans of 257 (5,140 pairs: counted by default).
-  // All of it twice: with the order queued in the same trip as the counts (the default,
-  // KDET_FCL_CUDA_ONE_TRIP; then the floor does not apply: counted by default wherever no
-  // segment is too large, and one_trip set where counted) and after them
-  // (KDET_FCL_CUDA_ONE_TRIP=0). Every host result here fits one 256 KiB read-back chunk (32,768
-  // pairs), so the one trip also brings the pairs (cameInTheTrip), the joint ones dealt out to
-  // the three results from there (OneTripBringsSmallHostResultsAndStepsAsideForLargeOnes has the
-  // limits). And the counting order both as one cooperative launch (KDET_FCL_CUDA_FUSED_ORDER:
-  // in one trip by default 2 blocks per SM; 1; 32, more than fit at once: as many as fit; after
-  // the counts at least one per SM) and in its five launches (0), in one trip and in two;
-  // order_blocks says which ran.
+  // be the same, on self, inter and joint queries, segments that span several first indices (the
+  // joint query of two meshes of 72k triangles; every query of a mesh of more than 2^12 triangles
+  // in the CTest run test_cuda_query_order_bits, 12 segment bits), max_pairs, a buffer on the
+  // device smaller than the pairs, forced overflows, and fans: 1024 pairs in one segment (counted
+  // when forced), 1025 (sorted), 80 fans of 60 (4,800 pairs: counted by default), 34 and 40 fans of
+  // 60 (2,040 pairs: sorted by default; 2,400: counted, where the limit was 4,096 until
+  // 2026-11-24); with KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=300, segments of 300 (counted when forced)
+  // and 301 (sorted), and 20 fans of 257 (5,140 pairs: counted by default). All of it twice: with
+  // the order queued in the same trip as the counts (the default, KDET_FCL_CUDA_ONE_TRIP; then the
+  // floor does not apply: counted by default wherever no segment is too large, and one_trip set
+  // where counted) and after them (KDET_FCL_CUDA_ONE_TRIP=0). Every host result here fits one 256
+  // KiB read-back chunk (32,768 pairs), so the one trip also brings the pairs (cameInTheTrip), the
+  // joint ones dealt out to the three results from there
+  // (OneTripBringsSmallHostResultsAndStepsAsideForLargeOnes has the limits). And the counting order
+  // both as one cooperative launch (KDET_FCL_CUDA_FUSED_ORDER: in one trip by default 2 blocks per
+  // SM; 1; 32, more than fit at once: as many as fit; after the counts at least one per SM) and in
+  // its five launches (0), in one trip and in two; order_blocks says which ran.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
