@@ -94,16 +94,11 @@ enum PairCountWord : int {
   kPairCountWords = 13
 };
 // The pairs' counting order (runQuery): the pairs are counted per segment (their first index,
-// with a joint query's kind, shifted right to at most kSegmentBits bits) as the exact kernels
+// with a joint query's kind, shifted right to at most segmentBits() bits) as the exact kernels
 // emit them; a scan, a scatter and a rank within each segment then order them as the radix sort
 // does, when there are at least kCountOrderMinPairs pairs (cuda_backend.h) and no segment holds
 // more than kSegmentMax (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT: segmentMax()) (else the radix sort
 // runs: fewer keys fit its single-tile sort, and a segment's rank reads the whole segment).
-// 17 bits (512 KB of segment counts): on an H100 the two cloth-ball frames' order (445,614 pairs,
-// ncu, one launch) took 72 µs at 16 bits, whose segments of 16 first indices hold about 50
-// pairs each, and 50 µs at 18 (benchmarks/RESULTS-gpu.md); 18 bits took those frames to 255
-// B/tri, next to issue 4's 256.
-constexpr int kSegmentBits = 17;
 constexpr unsigned int kSegmentMax = 1024;
 constexpr unsigned int kSegmentMaxLimit = 65536;  // the knob's largest value
 constexpr std::size_t kMaxDeviceTriangles = 150000000;  // a cache entry's (entry_tri's index bits)
@@ -2857,13 +2852,13 @@ int orderBlocksPerSm(Context& ctx) {
 }
 
 /// The bits of the counting order's segment index (a segment holds the pairs whose first index,
-/// with a joint query's kind above it, agrees in its top that many bits): kSegmentBits, or
-/// KDET_FCL_CUDA_COUNT_ORDER_BITS (12 .. 20). More bits: smaller segments, so fewer keys for
-/// each key's rank to read, against a larger scan and more memory for the segments' counts (4
-/// bytes each). Read at every query.
+/// with a joint query's kind above it, agrees in its top that many bits): kCountOrderSegmentBits
+/// (cuda_backend.h), or KDET_FCL_CUDA_COUNT_ORDER_BITS (12 .. 20). More bits: smaller segments,
+/// so fewer keys for each key's rank to read, against a larger scan and more memory for the
+/// segments' counts (4 bytes each). Read at every query.
 int segmentBits() {
   return static_cast<int>(
-      detail::numberKnob("KDET_FCL_CUDA_COUNT_ORDER_BITS", 12, 20, kSegmentBits));
+      detail::numberKnob("KDET_FCL_CUDA_COUNT_ORDER_BITS", 12, 20, kCountOrderSegmentBits));
 }
 
 /// The most pairs of one segment that the counting order ranks (each pair of a segment reads the
@@ -2968,7 +2963,7 @@ struct DeviceOut {
 /// Runs `launch(cand, survivors, out, round)` (it returns whether the plane filter ran) for each
 /// round of a pass, until every pair fits (overflow: grow, or more rounds; rerun), then puts the
 /// pairs in key order on the device (by counting them per segment, or by the radix sort: see
-/// kSegmentBits) and copies the first max_pairs (or all) of that order into the result. The
+/// segmentBits()) and copies the first max_pairs (or all) of that order into the result. The
 /// rounds (roundsFor: from `density`, the candidates per unit of `work` of the last query of
 /// this kind on these meshes, and from the counts of a pass that overflowed) split the candidate
 /// search's tasks into contiguous ranges (Round); each round's candidates and survivors reuse
@@ -3028,7 +3023,7 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
   unsigned long long* const w = ctx.pair_count.data();
   const unsigned long long* const h = ctx.hostCount();
   // The counting order's segments: a pair's first index (with a joint query's kind above it),
-  // shifted right to at most kSegmentBits bits.
+  // shifted right to at most segmentBits() bits.
   const bool kinds = split > 0;
   const int upper_bits = a_bits + (kinds ? 2 : 0);
   const int seg_shift = std::max(0, upper_bits - segmentBits());

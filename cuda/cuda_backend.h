@@ -133,6 +133,14 @@ namespace cuda {
 /// benchmarks/RESULTS-gpu.md). It was 4,096 until 2026-11-24.
 constexpr std::size_t kCountOrderMinPairs = 2048;
 
+/// The bits of the counting order's segment index by default (KDET_FCL_CUDA_COUNT_ORDER_BITS sets
+/// 12 to 20): a segment holds the pairs whose first index, with a joint query's kind above it,
+/// agrees in its top that many bits. 17 bits (512 KB of segment counts): on an H100 the two
+/// cloth-ball frames' order (445,614 pairs, ncu, one launch) took 72 us at 16 bits, whose
+/// segments of 16 first indices hold about 50 pairs each, and 50 us at 18; 18 bits took those
+/// frames to 255 B/tri, next to issue 4's 256 (benchmarks/RESULTS-gpu.md).
+constexpr int kCountOrderSegmentBits = 17;
+
 /// A query into a host result queues its pairs' order in the same trip as the pass's counts
 /// (KDET_FCL_CUDA_ONE_TRIP) unless the last query into a host result delivered more pairs than
 /// this many read-back chunks hold (KDET_FCL_CUDA_DOWNLOAD_CHUNK, 256 KiB: 32,768 pairs). A

@@ -1519,9 +1519,9 @@ std::size_t largestSegment(const std::vector<std::vector<TrianglePair>>& runs,
                            std::size_t triangles) {
   int bits = 1;
   while ((std::size_t(1) << bits) < triangles) ++bits;
-  // The segment index's bits: KDET_FCL_CUDA_COUNT_ORDER_BITS, 17 by default.
+  // The segment index's bits: KDET_FCL_CUDA_COUNT_ORDER_BITS, else the library's default.
   const char* knob = std::getenv("KDET_FCL_CUDA_COUNT_ORDER_BITS");
-  const int seg_bits = knob != nullptr ? std::atoi(knob) : 17;
+  const int seg_bits = knob != nullptr ? std::atoi(knob) : cuda::kCountOrderSegmentBits;
   const int upper = bits + (runs.size() > 1 ? 2 : 0);
   const int shift = upper > seg_bits ? upper - seg_bits : 0;
   std::map<std::uint64_t, std::size_t> count;
