@@ -1863,6 +1863,8 @@ struct CachedMesh {
   const void* owner = nullptr;
   const void* owner2 = nullptr;  // the second mesh of two hashed as one (else nullptr)
   std::uint64_t version = 0, version2 = 0;
+  std::uint64_t topology = 0, topology2 = 0;  // the meshes' topologyVersion() of the device's
+                                              // triangles (with `valid`)
   std::uint64_t fingerprint = 0;
   std::size_t nv = 0, nt = 0;
   bool valid = false;  // false: the next use rebuilds
@@ -2727,10 +2729,18 @@ CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm, const HashedMesh<S
   CachedMesh<S>& m = list.front();
   const bool same_ids = m.version == hm.version() && m.version2 == v2 && m.fingerprint == fp;
   if (m.valid && !m.force_vertices && same_ids) return m;
-  // markDeformed() with unchanged versions: only the vertices can have moved. Otherwise the
-  // triangles are compared on the host (cheaper than uploading them again).
-  const bool only_vertices = m.valid && m.force_vertices && same_ids;
+  // markDeformed() with unchanged versions: only the vertices can have moved. So too after
+  // updateVertices(), which keeps the topology version: the device's triangles are those of the
+  // meshes' topology versions (a moved-from mesh keeps its version but not its triangles: the
+  // count tells). Otherwise the triangles are compared on the host (cheaper than uploading them
+  // again; a comparison of every triangle per frame was most of a 1M-triangle re-hash's host
+  // time: benchmarks/RESULTS-gpu.md).
+  const std::uint64_t t2 = hm2 ? hm2->topologyVersion() : 0;
+  const bool only_vertices =
+      m.valid && ((m.force_vertices && same_ids) ||
+                  (m.topology == hm.topologyVersion() && m.topology2 == t2 && m.nt == src.nt()));
   auto sameTriangles = [&] {
+    ++ctx.profile.topology_compares;
     if (m.nt != src.nt() || m.host_tris.size() != src.nt() || m.t.data() == nullptr) return false;
     const std::vector<Triangle>& t0 = src.part[0]->triangles;
     if (!std::equal(t0.begin(), t0.end(), m.host_tris.begin())) return false;
@@ -2747,6 +2757,8 @@ CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm, const HashedMesh<S
   }
   m.version = hm.version();
   m.version2 = v2;
+  m.topology = hm.topologyVersion();
+  m.topology2 = t2;
   m.fingerprint = fp;
   m.force_vertices = false;
   m.valid = true;

@@ -242,6 +242,9 @@ struct QueryProfile {
                                 ///< entries by counting in the cell table, not by a sort
                                 ///< (meshes of up to KDET_FCL_CUDA_COUNT_BUILD_MAX triangles;
                                 ///< KDET_FCL_CUDA_COUNT_BUILD=0 never, 1 always)
+  int topology_compares = 0;    ///< meshes whose triangles were compared on the host with the
+                                ///< device's copy: a new topology version (setMesh, a new mesh);
+                                ///< never after updateVertices or markDeformed
   int pinned_uploads = 0;       ///< vertex uploads copied straight from the mesh's page-locked
                                 ///< buffer (KDET_FCL_CUDA_PIN_VERTICES; arrays of 256 KiB and up)
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)

@@ -1,10 +1,12 @@
 #include "kdet_fcl/hashed_mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <thread>
 #include <type_traits>
 #include <string>
 #include <utility>
@@ -14,6 +16,7 @@
 #endif
 
 #include "cpu/hierarchical_hash.h"
+#include "cpu/parallel.h"
 #include "kept_self_result.h"
 #include "kdet_fcl/errors.h"
 
@@ -108,25 +111,75 @@ template <class S>
 constexpr std::size_t kStep = kLanes<Vector<S>, S>;
 #endif
 
-/// The bounds of `v` in double (empty for no vertex), in one pass with no branch per vertex; false
-/// when a coordinate is not finite (its sum of x - x is then not 0). With SSE2, a step of 4 float
-/// or 2 double vertices is three vector loads feeding three independent chains of vector minima,
-/// maxima and sums; the scalar loop's three chains each wait on the latency of every step
-/// (updateVertices of the 92k cloth: 88-121 us with scalar loops, 31 us with this;
-/// benchmarks/RESULTS.md).
+/// The n vertices at v taken into e[0..2] (finiteBounds), in one pass with no branch per vertex.
+/// With SSE2, a step of 4 float or 2 double vertices is three vector loads feeding three
+/// independent chains of vector minima, maxima and sums; the scalar loop's three chains each wait
+/// on the latency of every step (updateVertices of the 92k cloth: 88-121 us with scalar loops,
+/// 31 us with this; benchmarks/RESULTS.md).
 template <class S>
-bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out) {
+void takeRange(const Vec3<S>* v, std::size_t n, Extent<S> e[3]) {
   static_assert(sizeof(Vec3<S>) == 3 * sizeof(S), "Vec3 must be three packed coordinates");
-  Extent<S> e[3];
   std::size_t i = 0;
 #if defined(__SSE2__)
-  i = v.size() / kStep<S> * kStep<S>;
+  i = n / kStep<S> * kStep<S>;
   if (i > 0) takeVectors<Vector<S>>(&v[0].x, i, e);
 #endif
-  for (; i < v.size(); ++i) {
+  for (; i < n; ++i) {
     e[0].take(v[i].x);
     e[1].take(v[i].y);
     e[2].take(v[i].z);
+  }
+}
+
+/// Vertex arrays of at least this many bytes are checked and copied by several threads
+/// (updateVertices): one per kVertexBytesPerThread, at most the mesh's threads, and only where
+/// that makes at least kMinVertexThreads. One thread streams about 10 GB/s on the hosts
+/// measured, so a 1M-triangle cloth's 13.5 MB of double positions took 3.6-3.9 ms to check and
+/// copy on one thread of a 16-core Xeon and 1.2-1.3 ms on 6 (H100 host, benchmarks/RESULTS-gpu.md);
+/// below 4 MB a thread's start costs more than it saves. Two threads did not pay: the 1M float
+/// cloth's 5.9 MB took 776-818 us on two threads of a 2-thread Xeon against 684-730 on one
+/// (update_bench, benchmarks/RESULTS.md), the two threads sharing one core's bandwidth.
+constexpr std::size_t kParallelVertexBytes = std::size_t(4) << 20;
+constexpr std::size_t kVertexBytesPerThread = std::size_t(2) << 20;
+constexpr int kMinVertexThreads = 3;
+
+/// The threads for a pass over `count` vertices of S: 1 below kParallelVertexBytes, else one per
+/// kVertexBytesPerThread, at most `threads` (0: the hardware's); 1 where that is fewer than
+/// kMinVertexThreads. The hardware's count is read once: std::thread::hardware_concurrency reads
+/// a file under /sys on glibc, tens of microseconds that a 5.9 MB update measured.
+template <class S>
+int vertexThreads(std::size_t count, int threads) {
+  const std::size_t bytes = count * sizeof(Vec3<S>);
+  if (bytes < kParallelVertexBytes) return 1;
+  static const int hardware = std::max(1, int(std::thread::hardware_concurrency()));
+  const int t =
+      cpu::resolveThreads(threads > 0 ? threads : hardware, bytes / kVertexBytesPerThread);
+  return t >= kMinVertexThreads ? t : 1;
+}
+
+/// The bounds of `v` in double (empty for no vertex), by takeRange in t threads (vertexThreads);
+/// false when a coordinate is not finite (its sum of x - x is then not 0).
+template <class S>
+bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int t) {
+  Extent<S> e[3];
+  if (t <= 1) {
+    takeRange(v.data(), v.size(), e);
+  } else {
+    // Each thread's share into its own extents, merged after (min, max and sums: the same bounds
+    // and the same verdict whatever the split).
+    const std::size_t per = (v.size() + t - 1) / t;
+    std::vector<std::array<Extent<S>, 3>> part(static_cast<std::size_t>(t));
+    cpu::forEachChunk(std::size_t(t), t, [&](std::size_t c) {
+      const std::size_t b = std::min(v.size(), c * per), n = std::min(v.size() - b, per);
+      takeRange(v.data() + b, n, part[c].data());
+      return true;
+    });
+    for (const auto& p : part)
+      for (int a = 0; a < 3; ++a) {
+        e[a].sum += p[a].sum;
+        e[a].lo = std::min(e[a].lo, p[a].lo);
+        e[a].hi = std::max(e[a].hi, p[a].hi);
+      }
   }
   *out = detail::Aabb<double>{{double(e[0].lo), double(e[1].lo), double(e[2].lo)},
                               {double(e[0].hi), double(e[1].hi), double(e[2].hi)}};
@@ -151,6 +204,7 @@ HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int th
   hash_ = std::make_unique<detail::HierarchicalHash<S>>();
   lazy_ = std::make_unique<Lazy>();
   kept_self_ = std::make_unique<detail::KeptSelfResult>("KDET_FCL_CPU_SELF_CACHE");
+  topologyChanged();
   geometryChanged();
 }
 
@@ -209,14 +263,23 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
   // One pass over the new coordinates checks them and gives their bounds, before the mesh is
   // touched; then they are copied into the mesh's own buffer, which keeps its address (no
   // allocation, no page faults; benchmarks/update_bench, RESULTS.md).
+  // Large arrays are checked and copied by several threads (vertexThreads).
+  const int t = vertexThreads<S>(vertices.size(), threads_);
   detail::Aabb<double> b;
-  if (!finiteBounds(vertices, &b)) {
+  if (!finiteBounds(vertices, &b, t)) {
     TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
     probe.vertices = vertices;
     probe.validate(false, "updateVertices");
     throw InvalidInputError("updateVertices: a non-finite coordinate");
   }
-  std::copy(vertices.begin(), vertices.end(), mesh_.vertices.begin());
+  if (t <= 1) {
+    std::copy(vertices.begin(), vertices.end(), mesh_.vertices.begin());
+  } else {
+    const std::size_t per = (vertices.size() + t - 1) / t;
+    cpu::parallelFor(vertices.size(), per, t, [&](std::size_t lo, std::size_t hi) {
+      std::copy(vertices.begin() + lo, vertices.begin() + hi, mesh_.vertices.begin() + lo);
+    });
+  }
   geometryChanged(b);
 }
 
@@ -225,13 +288,22 @@ void HashedMesh<S>::setMesh(TriangleMesh<S> mesh) {
   mesh.validate(false, "setMesh");
   host_pin_.reset();  // the vertex buffer is replaced
   mesh_ = std::move(mesh);
+  topologyChanged();
   geometryChanged();
+}
+
+template <class S>
+void HashedMesh<S>::topologyChanged() {
+  // Unique in the process, as versions are (a new mesh at a freed mesh's address gets a new one).
+  static std::atomic<std::uint64_t> next_topology{1};
+  topology_version_ = next_topology.fetch_add(1);
 }
 
 template <class S>
 void HashedMesh<S>::geometryChanged() {
   detail::Aabb<double> b;
-  const bool finite = finiteBounds(mesh_.vertices, &b);
+  const bool finite =
+      finiteBounds(mesh_.vertices, &b, vertexThreads<S>(mesh_.vertices.size(), threads_));
   (void)finite;  // validated by the caller
   geometryChanged(b);
 }

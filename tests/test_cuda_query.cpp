@@ -685,6 +685,61 @@ TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
   expectSameSelf(cloth, "shuffled self");
 }
 
+// The device keeps a mesh's triangles keyed by its topology version: after updateVertices (the
+// same version) a query re-hashes without comparing the triangles on the host
+// (QueryProfile::topology_compares 0); a new version (setMesh, even of the same triangles or of as
+// many other ones) compares them once; a new cache entry once (nothing to compare with). Also
+// for two meshes hashed as one (intersectAll). Every answer equals the CPU's.
+TEST(CudaQuery, DeformedMeshesKeepTheirTrianglesWithoutAHostComparison) {
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  cuda::setProfiling(true);
+  HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 0.0));
+  auto compares = [&](const std::string& what) {
+    expectSameSelf(cloth, what);
+    return cuda::lastQueryProfile().topology_compares;
+  };
+  EXPECT_EQ(compares("first query"), 1);
+  for (double t : {0.4, 0.8}) {
+    cloth.updateVertices(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, t).vertices);
+    EXPECT_EQ(compares("deformed to t = " + std::to_string(t)), 0);
+  }
+  TriangleMesh<double> same = cloth.mesh();
+  cloth.setMesh(same);
+  EXPECT_EQ(compares("the same triangles set anew"), 1);
+  TriangleMesh<double> shuffled = same;
+  std::mt19937_64 rng(9);
+  std::shuffle(shuffled.triangles.begin(), shuffled.triangles.end(), rng);
+  cloth.setMesh(shuffled);
+  EXPECT_EQ(compares("as many other triangles"), 1);
+  cloth.updateVertices(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 1.0).vertices);
+  EXPECT_EQ(compares("deformed after the new topology"), 0);
+  // Two meshes as one: a deformation of either compares nothing, a new topology of the second
+  // compares the joint entry once.
+  HashedMesh<double> f0(makeDrapedCloth<double>(40, 4.0, 1.0, 0.03, 0.8));
+  HashedMesh<double> f1(makeDrapedCloth<double>(40, 4.0, 1.0, 0.03, 0.85));
+  const QueryOptions o = on(Backend::Cuda);
+  auto all = [&](const std::string& what) {
+    const AllPairsResult r = intersectAll(f0, f1, o);
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    EXPECT_TRUE(p.joint) << what;
+    const QueryOptions c = on(Backend::Cpu);
+    EXPECT_EQ(r.inter.pairs, sorted(intersectMeshes(f0, f1, c).pairs)) << what;
+    EXPECT_EQ(r.self_a.pairs, sorted(intersectSelf(f0, c).pairs)) << what;
+    EXPECT_EQ(r.self_b.pairs, sorted(intersectSelf(f1, c).pairs)) << what;
+    return p.topology_compares;
+  };
+  EXPECT_EQ(all("joint, first"), 1);
+  f1.updateVertices(makeDrapedCloth<double>(40, 4.0, 1.0, 0.03, 0.9).vertices);
+  EXPECT_EQ(all("joint, second deformed"), 0);
+  TriangleMesh<double> torn = f1.mesh();
+  torn.triangles.resize(torn.triangles.size() / 2);
+  f1.setMesh(torn);
+  EXPECT_EQ(all("joint, second torn"), 1);
+  cuda::setProfiling(false);
+#endif
+}
+
 // Vertex arrays of 1 MiB and up are registered as page-locked memory on their second upload and
 // then copied straight from the mesh's buffer (QueryProfile::pinned_uploads; a re-hash that
 // falls back uploads again), frame after frame, as long as the buffer stays (updateVertices

@@ -329,6 +329,101 @@ TEST(HashedMesh, UpdateVerticesKeepsTheBufferAndBoundsInOnePass) {
   checkUpdateVerticesInPlace<double>();
 }
 
+// From 4 MB of positions on, updateVertices checks and copies them in several threads (one per
+// 2 MB, at most the mesh's, where that makes at least 3: here 3 and 4 of the counts below): the
+// same bounds, the same positions, the same refusal of a non-finite coordinate in any thread's
+// share (first and last vertex of each share and their neighbours) with the vertex named and the
+// mesh left as it was, for every thread count.
+template <class S>
+void checkUpdateVerticesInThreads() {
+  const std::size_t nv = (std::size_t(9) << 20) / sizeof(Vec3<S>);  // 9 MB: up to 4 threads
+  TriangleMesh<S> m;
+  for (std::size_t i = 0; i < nv; ++i)
+    m.vertices.push_back({S(i % 1000), S((i / 1000) % 1000), S(i % 7) - S(3)});
+  m.triangles.push_back({0, 1, 2});
+  std::vector<Vec3<S>> moved = m.vertices;
+  for (std::size_t i = 0; i < nv; ++i)
+    moved[i] = {moved[i].x * S(0.5) - S(11), -moved[i].y, moved[i].z + S(i % 13)};
+  moved[nv / 3] = {S(-1e6), S(2e6), S(-3e6)};  // extremes inside the second share
+  moved[nv - 1] = {S(4e6), S(-5e6), S(6e6)};   // and at the end
+  detail::Aabb<double> want{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+  for (const Vec3<S>& p : moved)
+    for (int a = 0; a < 3; ++a) {
+      want.lo[a] = std::min(want.lo[a], double(p[a]));
+      want.hi[a] = std::max(want.hi[a], double(p[a]));
+    }
+  for (int threads : {1, 2, 3, 4, 0}) {
+    HashedMesh<S> hm(m, Transform<S>::identity(), threads);
+    const Vec3<S>* buffer = hm.mesh().vertices.data();
+    hm.updateVertices(moved);
+    EXPECT_EQ(hm.mesh().vertices.data(), buffer) << threads;
+    EXPECT_TRUE(hm.mesh().vertices == moved) << threads;
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(hm.localBounds().lo[a], want.lo[a]) << threads << " " << a;
+      EXPECT_EQ(hm.localBounds().hi[a], want.hi[a]) << threads << " " << a;
+    }
+    std::vector<std::size_t> at = {0, 1, nv - 2, nv - 1};
+    for (int t = 2; t <= 4; ++t)
+      for (int k = 1; k < t; ++k) {
+        const std::size_t edge = k * ((nv + t - 1) / t);  // where a share of t threads starts
+        at.insert(at.end(), {edge - 1, edge, edge + 1});
+      }
+    for (const std::size_t i : at) {
+      std::vector<Vec3<S>> v = moved;
+      v[i][int(i % 3)] = i % 2 ? std::numeric_limits<S>::infinity()
+                               : std::numeric_limits<S>::quiet_NaN();
+      const auto before = hm.version();
+      try {
+        hm.updateVertices(v);
+        ADD_FAILURE() << "accepted a non-finite coordinate at vertex " << i << ", " << threads
+                      << " threads";
+      } catch (const InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex " + std::to_string(i) + " "),
+                  std::string::npos)
+            << e.what();
+      }
+      EXPECT_EQ(hm.version(), before);
+      EXPECT_TRUE(hm.mesh().vertices == moved) << "changed by a refused update at " << i;
+    }
+  }
+}
+
+TEST(HashedMesh, UpdateVerticesOfLargeArraysInSeveralThreadsChecksAndBoundsTheSame) {
+  checkUpdateVerticesInThreads<float>();
+  checkUpdateVerticesInThreads<double>();
+}
+
+// The topology version changes with the triangles only (construction, setMesh), not with
+// updateVertices or setPose; it is unique in the process and goes along with a move. The CUDA
+// backend keys its copy of the triangles by it (test_cuda_query checks that side).
+TEST(HashedMesh, TopologyVersionChangesWithTheTrianglesOnly) {
+  const TriangleMesh<double> sphere = makeSphere<double>({0, 0, 0}, 1, 12, 6);
+  HashedMesh<double> a(sphere), b(sphere);
+  EXPECT_NE(a.topologyVersion(), b.topologyVersion());
+  const auto t0 = a.topologyVersion(), v0 = a.version();
+  std::vector<Vec3<double>> moved = sphere.vertices;
+  for (auto& p : moved) p.x += 0.5;
+  a.updateVertices(moved);
+  Transform<double> shifted;
+  shifted.t = {1, 2, 3};
+  a.setPose(shifted);
+  EXPECT_GT(a.version(), v0);
+  EXPECT_EQ(a.topologyVersion(), t0);
+  TriangleMesh<double> bad;  // a vertex index out of range
+  bad.vertices = {{0, 0, 0}};
+  bad.triangles = {{0, 0, 5}};
+  EXPECT_THROW(a.setMesh(bad), InvalidInputError);
+  EXPECT_EQ(a.topologyVersion(), t0);  // a refused setMesh changes nothing
+  a.setMesh(sphere);  // the same triangles, but set anew
+  const auto t1 = a.topologyVersion();
+  EXPECT_NE(t1, t0);
+  EXPECT_NE(t1, b.topologyVersion());
+  HashedMesh<double> c(std::move(a));
+  EXPECT_EQ(c.topologyVersion(), t1);
+  b = std::move(c);
+  EXPECT_EQ(b.topologyVersion(), t1);
+}
+
 // The registration of the vertex buffer (detail::HostPin, made by the CUDA backend for direct
 // device copies) lives exactly as long as that buffer: updateVertices keeps it (same buffer),
 // setMesh, move assignment and the destructor drop it before the buffer goes, and a move takes

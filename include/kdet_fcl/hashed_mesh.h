@@ -78,6 +78,12 @@ class HashedMesh {
   /// setPose), unique within the process (no two meshes ever share one), and increasing.
   std::uint64_t version() const { return version_; }
 
+  /// Identifies the current triangles: a new value when they may have changed (construction,
+  /// setMesh), the same after updateVertices and setPose; unique within the process, like
+  /// version(). A cache of the topology keyed by it (the CUDA backend's) needs no comparison of
+  /// the triangles after a deformation.
+  std::uint64_t topologyVersion() const { return topology_version_; }
+
   /// The CPU hierarchy's shape and memory. Builds the CPU hash if it is stale (like a query).
   HierarchyStats stats() const;
 
@@ -117,6 +123,8 @@ class HashedMesh {
   detail::HostPin& hostPin() const { return host_pin_; }
 
  private:
+  /// After new triangles (construction, setMesh): a new topology version.
+  void topologyChanged();
   /// After a geometry change: a new version, fresh bounds, the CPU hash marked stale.
   void geometryChanged();
   /// The same with the new bounds known (updateVertices computes them while checking).
@@ -137,6 +145,7 @@ class HashedMesh {
   std::unique_ptr<Lazy> lazy_;
   std::unique_ptr<detail::KeptSelfResult> kept_self_;
   std::uint64_t version_ = 0;
+  std::uint64_t topology_version_ = 0;
   int threads_ = 0;
 };
 
