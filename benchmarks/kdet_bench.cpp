@@ -160,11 +160,20 @@ PairList sorted(std::vector<TrianglePair> v) {
 // query's lookups visit (HashedMesh::hashFrom), so the inter queries come first: their time plus
 // the update's is what an FCL user's frame costs (FCL answers no self query), and a self query
 // then adds the levels still missing, which it times.
+using Positions = std::vector<kdet_fcl::Vec3<double>>;
+
+/// A deforming object's positions in mesh `m` written into the buffer a simulation keeps for it
+/// (its storage kept from frame to frame), as both GPU methods' runs hand them over.
+const Positions& simulationFrame(Positions& buffer, const kb::Mesh& m) {
+  buffer.assign(m.vertices.begin(), m.vertices.end());
+  return buffer;
+}
+
 /// kDet's objects kept from run to run (obj.size() == objects; null until built), and each
 /// deforming object's positions as a simulation keeps them (as BvhObjects).
 struct KdetObjects {
   std::vector<std::unique_ptr<kdet_fcl::HashedMesh<double>>> obj;
-  std::vector<std::vector<kdet_fcl::Vec3<double>>> positions;
+  std::vector<Positions> positions;
 };
 
 /// One run of kDet over the scene's frames. With `kept` (the GPU runs), the objects live from
@@ -188,12 +197,9 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
   objects.positions.resize(s.objects.size());
   // The positions updateVertices gets for object o in frame fr: the frame's own array (CPU runs),
   // or a copy of it in the object's buffer, made before the timer starts (kept objects).
-  using Positions = std::vector<kdet_fcl::Vec3<double>>;
   auto frameVertices = [&](const kb::Frame& fr, std::size_t o) -> const Positions& {
     if (kept == nullptr) return fr.meshes[o]->vertices;
-    Positions& p = objects.positions[o];
-    p.assign(fr.meshes[o]->vertices.begin(), fr.meshes[o]->vertices.end());
-    return p;
+    return simulationFrame(objects.positions[o], *fr.meshes[o]);
   };
   kdet_fcl::QueryOptions q;
   q.threads = threads;
@@ -286,7 +292,7 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
 /// later run refits a deformed object to frame 0's positions and rebuilds a fractured one.
 struct BvhObjects {
   std::vector<std::unique_ptr<kdet_bvh::GpuBvh<double>>> tree;
-  std::vector<std::vector<kdet_fcl::Vec3<double>>> positions;
+  std::vector<Positions> positions;
 };
 
 std::vector<FrameRecord> runBvhOnce(const kb::Scene& s, bool collect, BvhObjects& kept) {
@@ -311,8 +317,7 @@ std::vector<FrameRecord> runBvhOnce(const kb::Scene& s, bool collect, BvhObjects
         }
         obj[o]->setMesh(*fr.meshes[o]);
         if (motion == kb::Motion::Deform) {  // its buffer registered in the build frame
-          positions[o] = fr.meshes[o]->vertices;
-          obj[o]->updateVertices(positions[o]);
+          obj[o]->updateVertices(simulationFrame(positions[o], *fr.meshes[o]));
         }
         rec.update_ms += msSince(t0);
         continue;
@@ -320,10 +325,9 @@ std::vector<FrameRecord> runBvhOnce(const kb::Scene& s, bool collect, BvhObjects
       if (motion != kb::Motion::Deform ||
           (f > 0 && fr.meshes[o] == s.frames[f - 1].meshes[o]))
         continue;
-      std::copy(fr.meshes[o]->vertices.begin(), fr.meshes[o]->vertices.end(),
-                positions[o].begin());
+      const Positions& v = simulationFrame(positions[o], *fr.meshes[o]);
       const auto t0 = Clock::now();
-      obj[o]->updateVertices(positions[o]);
+      obj[o]->updateVertices(v);
       rec.update_ms += msSince(t0);
     }
     for (auto [a, b] : s.inter) {

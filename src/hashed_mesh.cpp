@@ -138,7 +138,7 @@ void takeRange(const Vec3<S>* v, std::size_t n, Extent<S> e[3]) {
 /// copy on one thread of a 16-core Xeon and 1.2-1.3 ms on 6 (H100 host, benchmarks/RESULTS-gpu.md);
 /// below 4 MB a thread's start costs more than it saves. Two threads did not pay: the 1M float
 /// cloth's 5.9 MB took 776-818 us on two threads of a 2-thread Xeon against 684-730 on one
-/// (update_bench, benchmarks/RESULTS.md), the two threads sharing one core's bandwidth.
+/// (update_bench, benchmarks/RESULTS.md).
 constexpr std::size_t kParallelVertexBytes = std::size_t(4) << 20;
 constexpr std::size_t kVertexBytesPerThread = std::size_t(2) << 20;
 constexpr int kMinVertexThreads = 3;
@@ -157,6 +157,11 @@ int vertexThreads(std::size_t count, int threads) {
   return t >= kMinVertexThreads ? t : 1;
 }
 
+/// Each of t threads' share of n items (at least 1, so that an empty array is one empty chunk).
+inline std::size_t shareOf(std::size_t n, int t) {
+  return std::max<std::size_t>(1, (n + std::size_t(t) - 1) / std::size_t(t));
+}
+
 /// The bounds of `v` in double (empty for no vertex), by takeRange in t threads (vertexThreads);
 /// false when a coordinate is not finite (its sum of x - x is then not 0).
 template <class S>
@@ -167,12 +172,10 @@ bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int 
   } else {
     // Each thread's share into its own extents, merged after (min, max and sums: the same bounds
     // and the same verdict whatever the split).
-    const std::size_t per = (v.size() + t - 1) / t;
+    const std::size_t per = shareOf(v.size(), t);
     std::vector<std::array<Extent<S>, 3>> part(static_cast<std::size_t>(t));
-    cpu::forEachChunk(std::size_t(t), t, [&](std::size_t c) {
-      const std::size_t b = std::min(v.size(), c * per), n = std::min(v.size() - b, per);
-      takeRange(v.data() + b, n, part[c].data());
-      return true;
+    cpu::parallelFor(v.size(), per, t, [&](std::size_t lo, std::size_t hi) {
+      takeRange(v.data() + lo, hi - lo, part[lo / per].data());
     });
     for (const auto& p : part)
       for (int a = 0; a < 3; ++a) {
@@ -272,14 +275,12 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
     probe.validate(false, "updateVertices");
     throw InvalidInputError("updateVertices: a non-finite coordinate");
   }
-  if (t <= 1) {
-    std::copy(vertices.begin(), vertices.end(), mesh_.vertices.begin());
-  } else {
-    const std::size_t per = (vertices.size() + t - 1) / t;
-    cpu::parallelFor(vertices.size(), per, t, [&](std::size_t lo, std::size_t hi) {
-      std::copy(vertices.begin() + lo, vertices.begin() + hi, mesh_.vertices.begin() + lo);
-    });
-  }
+  // (One thread: a single chunk, copied in place by the caller's thread.)
+  cpu::parallelFor(vertices.size(), shareOf(vertices.size(), t), t,
+                   [&](std::size_t lo, std::size_t hi) {
+                     std::copy(vertices.begin() + lo, vertices.begin() + hi,
+                               mesh_.vertices.begin() + lo);
+                   });
   geometryChanged(b);
 }
 
