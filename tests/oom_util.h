@@ -3,6 +3,7 @@
 // limited (soft RLIMIT_AS) to its current size plus a headroom; the child's exit code reports how
 // an allocation failure surfaced. Shared by test_bad_input.cpp and test_hierarchy.cpp.
 
+#include <malloc.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -21,6 +22,14 @@ inline std::size_t currentAddressSpace() {
   in >> pages;
   return pages * std::size_t(::sysconf(_SC_PAGESIZE));
 }
+
+/// One malloc arena for the whole program, set before main() (before any thread exists). glibc
+/// gives other threads arenas of their own, each reserving 64 MB of address space up front, and
+/// when an allocation of the main thread fails it retries in one of those: inside a limit set
+/// after some threads ran (a whole test program in one process, a CPU query before), the body's
+/// allocations then fit the reserve and the limit never bites. With one arena every allocation
+/// takes new address space (brk or mmap) that the limit counts.
+inline const int kOneMallocArena = ::mallopt(M_ARENA_MAX, 1);
 
 /// Limits the address space to its current size plus `headroom` bytes.
 inline void limitAddressSpace(std::size_t headroom) {
