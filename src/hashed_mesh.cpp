@@ -214,6 +214,7 @@ HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int th
 template <class S>
 HashedMesh<S>::~HashedMesh() {
   host_pin_.reset();  // before mesh_ frees the buffer it is for
+  write_pin_.reset();
 }
 template <class S>
 HashedMesh<S>::HashedMesh(HashedMesh&&) noexcept = default;
@@ -285,9 +286,39 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
 }
 
 template <class S>
+Vec3<S>* HashedMesh<S>::vertexWriteBuffer() {
+  // (Empty only since construction or setMesh, which also dropped its pin record.)
+  if (write_buffer_.size() != mesh_.vertices.size()) write_buffer_.resize(mesh_.vertices.size());
+  return write_buffer_.data();
+}
+
+template <class S>
+void HashedMesh<S>::commitVertices() {
+  if (write_buffer_.size() != mesh_.vertices.size())
+    throw InvalidInputError(
+        "commitVertices: nothing to commit (call vertexWriteBuffer() and write the positions "
+        "there first)");
+  // The check and the bounds of updateVertices, on the written buffer in place; then the two
+  // buffers, and each one's pin record, trade places (no copy, no allocation).
+  const int t = vertexThreads<S>(write_buffer_.size(), threads_);
+  detail::Aabb<double> b;
+  if (!finiteBounds(write_buffer_, &b, t)) {
+    TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
+    probe.vertices = write_buffer_;
+    probe.validate(false, "commitVertices");
+    throw InvalidInputError("commitVertices: a non-finite coordinate");
+  }
+  mesh_.vertices.swap(write_buffer_);
+  std::swap(host_pin_, write_pin_);
+  geometryChanged(b);
+}
+
+template <class S>
 void HashedMesh<S>::setMesh(TriangleMesh<S> mesh) {
   mesh.validate(false, "setMesh");
-  host_pin_.reset();  // the vertex buffer is replaced
+  host_pin_.reset();  // the vertex buffers are replaced
+  write_pin_.reset();
+  std::vector<Vec3<S>>().swap(write_buffer_);
   mesh_ = std::move(mesh);
   topologyChanged();
   geometryChanged();

@@ -145,6 +145,16 @@ TYPED_TEST(BadInput, AFailedChangeKeepsTheHashedMeshAsItWas) {
     EXPECT_EQ(std::memcmp(v.data(), copy.data(), v.size() * sizeof v[0]), 0);
     unchanged("updateVertices(non-finite)");
   }
+  // commitVertices: nothing written yet, then non-finite coordinates written in place.
+  expectInvalid([&] { h.commitVertices(); }, "vertexWriteBuffer", "commitVertices(nothing)");
+  unchanged("commitVertices(nothing)");
+  for (const S bad : {std::numeric_limits<S>::quiet_NaN(), -std::numeric_limits<S>::infinity()}) {
+    Vec3<S>* w = h.vertexWriteBuffer();
+    std::copy(mesh.vertices.begin(), mesh.vertices.end(), w);
+    w[1].z = bad;
+    expectInvalid([&] { h.commitVertices(); }, "vertex 1", "commitVertices(non-finite)");
+    unchanged("commitVertices(non-finite)");
+  }
   // setMesh: every invalid mesh (passed by copy: the caller's copy must survive unchanged).
   for (const auto& [bad, needle] : invalidMeshes<S>()) {
     const TriangleMesh<S> copy = bad;

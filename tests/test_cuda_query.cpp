@@ -12,6 +12,7 @@
 #include <iostream>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <random>
@@ -811,6 +812,60 @@ TEST(CudaQuery, LargeVertexArraysAreCopiedStraightFromTheirRegisteredBuffer) {
     // The cloth's buffer is registered already; the other's on its second upload.
     if (cuda::lastQueryProfile().joint) EXPECT_EQ(pinned(), round == 0 ? 1 : 2) << round;
   }
+  cuda::setProfiling(false);
+#endif
+}
+
+// commitVertices: the mesh's buffer alternates between two, each registered on its own second
+// upload and copied straight from after that (QueryProfile::pinned_uploads), with no comparison
+// of the triangles (the topology is kept); a refused commit leaves the device answering for the
+// positions before it. Every answer, self and inter, equals the CPU's.
+TEST(CudaQuery, CommittedVerticesAreUploadedFromBothRegisteredBuffers) {
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  kdet_test::ScopedEnv pin_default("KDET_FCL_CUDA_PIN_VERTICES", nullptr);
+  cuda::setProfiling(true);
+  const int n = 320;  // 321^2 float vertices: 1.24 MB, registered from the second upload on
+  auto frame = [&](double t) { return makeDrapedCloth<float>(n, 4.0f, 1.0f, 0.03f, float(t)); };
+  HashedMesh<float> sphere(makeSphere<float>({0, 0, 0}, 1.0f, 32, 16));
+  HashedMesh<float> cloth(frame(0.2));
+  auto pinned = [&]() {
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    return p.pinned_uploads > 0 ? p.pinned_uploads - p.rehash_fallbacks : 0;
+  };
+  std::size_t pairs = expectSameInter(cloth, sphere, "first build");
+  EXPECT_EQ(pinned(), 0);
+  const void* first = cloth.mesh().vertices.data();
+  // Frames 1..6 alternate: the second buffer's first upload (frame 1) is staged, every later
+  // upload of either buffer is a DMA from its registration.
+  for (int f = 1; f <= 6; ++f) {
+    const TriangleMesh<float> next = frame(0.2 + 0.1 * f);
+    Vec3<float>* w = cloth.vertexWriteBuffer();
+    std::copy(next.vertices.begin(), next.vertices.end(), w);
+    cloth.commitVertices();
+    ASSERT_EQ(cloth.mesh().vertices.data(), w);
+    EXPECT_EQ(cloth.mesh().vertices.data() == first, f % 2 == 0) << f;
+    const std::string what = "frame " + std::to_string(f);
+    pairs += expectSameInter(cloth, sphere, what);
+    const int p = pinned();
+    if (f == 2 && cloth.hostPin().tried() && !cloth.hostPin().pinned())
+      GTEST_SKIP() << "this machine refused to register host memory (cudaHostRegister)";
+    EXPECT_EQ(p, f == 1 ? 0 : 1) << what;
+    EXPECT_EQ(cuda::lastQueryProfile().topology_compares, 0) << what;
+    EXPECT_EQ(cloth.hostPin().at(), cloth.mesh().vertices.data()) << what;
+    pairs += expectSameSelf(cloth, what + ", self");
+  }
+  EXPECT_GT(pairs, 0u);  // the frames test something
+  // A refused commit: the device keeps answering for the positions before it.
+  const std::vector<Vec3<float>> before = cloth.mesh().vertices;
+  Vec3<float>* w = cloth.vertexWriteBuffer();
+  std::fill(w, w + cloth.numVertices(), Vec3<float>{0.f, 0.f, 0.f});
+  w[7].x = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(cloth.commitVertices(), InvalidInputError);
+  EXPECT_EQ(cloth.mesh().vertices, before);
+  const HashedMesh<float> same(TriangleMesh<float>{cloth.mesh()});
+  EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs,
+            sorted(intersectMeshes(same, sphere, on(Backend::Cpu)).pairs));
   cuda::setProfiling(false);
 #endif
 }

@@ -333,7 +333,9 @@ TEST(HashedMesh, UpdateVerticesKeepsTheBufferAndBoundsInOnePass) {
 // 2 MB, at most the mesh's, where that makes at least 3: here 3 and 4 of the counts below): the
 // same bounds, the same positions, the same refusal of a non-finite coordinate in any thread's
 // share (first and last vertex of each share and their neighbours) with the vertex named and the
-// mesh left as it was, for every thread count.
+// mesh left as it was, for every thread count. commitVertices checks its write buffer in place
+// by the same rule: the same bounds and refusals (the refused positions left in the write buffer
+// as written, the mesh unchanged), and a mended buffer commits.
 template <class S>
 void checkUpdateVerticesInThreads() {
   const std::size_t nv = (std::size_t(9) << 20) / sizeof(Vec3<S>);  // 9 MB: up to 4 threads
@@ -384,7 +386,30 @@ void checkUpdateVerticesInThreads() {
       }
       EXPECT_EQ(hm.version(), before);
       EXPECT_TRUE(hm.mesh().vertices == moved) << "changed by a refused update at " << i;
+      Vec3<S>* w = hm.vertexWriteBuffer();
+      std::copy(v.begin(), v.end(), w);
+      try {
+        hm.commitVertices();
+        ADD_FAILURE() << "committed a non-finite coordinate at vertex " << i << ", " << threads
+                      << " threads";
+      } catch (const InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex " + std::to_string(i) + " "),
+                  std::string::npos)
+            << e.what();
+      }
+      EXPECT_EQ(hm.version(), before);
+      EXPECT_TRUE(hm.mesh().vertices == moved) << "changed by a refused commit at " << i;
+      EXPECT_EQ(std::memcmp(w, v.data(), nv * sizeof(Vec3<S>)), 0) << "write buffer at " << i;
     }
+    // The mended write buffer commits, with the bounds of what it holds (moved, reflected).
+    Vec3<S>* w = hm.vertexWriteBuffer();
+    for (std::size_t i = 0; i < nv; ++i) w[i] = {-moved[i].x, moved[i].y, moved[i].z};
+    hm.commitVertices();
+    EXPECT_EQ(hm.mesh().vertices.data(), w) << threads;
+    EXPECT_EQ(hm.localBounds().lo.x, -want.hi.x) << threads;
+    EXPECT_EQ(hm.localBounds().hi.x, -want.lo.x) << threads;
+    EXPECT_EQ(hm.localBounds().lo.y, want.lo.y) << threads;
+    EXPECT_EQ(hm.localBounds().hi.z, want.hi.z) << threads;
   }
 }
 
@@ -422,6 +447,63 @@ TEST(HashedMesh, TopologyVersionChangesWithTheTrianglesOnly) {
   EXPECT_EQ(c.topologyVersion(), t1);
   b = std::move(c);
   EXPECT_EQ(b.topologyVersion(), t1);
+}
+
+// commitVertices: the positions written into vertexWriteBuffer() become the mesh's without a copy
+// (the two buffers trade places, so the mesh's buffer alternates between two addresses), with
+// the same version rules and bounds as updateVertices, and every query answers for them as for
+// a mesh built from those positions (frames of a cloth over a sphere, self and inter, brute force
+// as the reference). updateVertices after a commit copies into the current buffer, as always.
+TEST(HashedMesh, CommittedVerticesBecomeTheMeshsWithoutACopy) {
+  auto frame = [](double t) { return makeDrapedCloth<double>(24, 4.0, 1.0, 0.03, t); };
+  const TriangleMesh<double> ball = makeSphere<double>({0, 0, 0}, 1.0, 16, 8);
+  HashedMesh<double> cloth(frame(0.2)), sphere(ball);
+  const auto t0 = cloth.topologyVersion();
+  EXPECT_EQ(cloth.numVertices(), frame(0.2).vertices.size());
+  const Vec3<double>* first = cloth.mesh().vertices.data();
+  const Vec3<double>* second = nullptr;
+  int frames_with_pairs = 0;
+  for (int f = 1; f <= 5; ++f) {
+    const TriangleMesh<double> want = frame(0.2 + 0.15 * f);
+    Vec3<double>* w = cloth.vertexWriteBuffer();
+    ASSERT_NE(w, cloth.mesh().vertices.data());
+    if (f == 1) second = w;
+    EXPECT_EQ(w, f % 2 ? second : first) << f;  // the two buffers alternate
+    std::copy(want.vertices.begin(), want.vertices.end(), w);
+    const auto v0 = cloth.version();
+    cloth.commitVertices();
+    EXPECT_EQ(cloth.mesh().vertices.data(), w) << f;  // no copy: the written buffer is the mesh's
+    EXPECT_EQ(cloth.mesh().vertices, want.vertices) << f;
+    EXPECT_GT(cloth.version(), v0);
+    EXPECT_EQ(cloth.topologyVersion(), t0);
+    EXPECT_FALSE(cloth.cpuHashFresh());
+    const detail::Aabb<double> b = cloth.localBounds();
+    const detail::Aabb<double> fresh = HashedMesh<double>(want).localBounds();
+    EXPECT_EQ(b.lo.x, fresh.lo.x);
+    EXPECT_EQ(b.hi.z, fresh.hi.z);
+    const auto self = kdet_test::sorted(intersectSelf(cloth).pairs);
+    const auto inter = kdet_test::sorted(intersectMeshes(cloth, sphere).pairs);
+    EXPECT_EQ(self, kdet_test::sorted(bruteForceIntersectSelf(want))) << f;
+    EXPECT_EQ(inter, kdet_test::sorted(bruteForceIntersectMeshes(want, {}, ball, {}))) << f;
+    frames_with_pairs += !self.empty() && !inter.empty();
+  }
+  EXPECT_GT(frames_with_pairs, 0);  // the frames test something
+  // updateVertices copies into the current buffer and keeps it; the next write buffer is the other.
+  const Vec3<double>* current = cloth.mesh().vertices.data();
+  cloth.updateVertices(frame(0.3).vertices);
+  EXPECT_EQ(cloth.mesh().vertices.data(), current);
+  EXPECT_EQ(cloth.mesh().vertices, frame(0.3).vertices);
+  EXPECT_NE(cloth.vertexWriteBuffer(), current);
+  // A move takes both buffers along.
+  HashedMesh<double> moved(std::move(cloth));
+  EXPECT_EQ(moved.mesh().vertices.data(), current);
+  const TriangleMesh<double> last = frame(0.4);
+  Vec3<double>* w = moved.vertexWriteBuffer();
+  std::copy(last.vertices.begin(), last.vertices.end(), w);
+  moved.commitVertices();
+  EXPECT_EQ(moved.mesh().vertices, last.vertices);
+  EXPECT_EQ(kdet_test::sorted(intersectSelf(moved).pairs),
+            kdet_test::sorted(bruteForceIntersectSelf(last)));
 }
 
 // The registration of the vertex buffer (detail::HostPin, made by the CUDA backend for direct
@@ -483,6 +565,42 @@ TEST(HashedMesh, AVertexBufferRegistrationLivesExactlyAsLongAsTheBuffer) {
     EXPECT_EQ(f.hostPin().at(), f.mesh().vertices.data());
   }  // k's destructor drops the last registration before its buffer goes
   EXPECT_EQ(released, 3);
+  // commitVertices: each buffer's registration moves with it, so the mesh's record is always its
+  // current buffer's; setMesh and the destructor drop both before the buffers go.
+  {
+    std::vector<Vec3<double>> moved = sphere.vertices;
+    for (auto& p : moved) p.y += 0.5;
+    moved[0] = sphere.vertices[0];  // the release checks the first vertex
+    HashedMesh<double> c(sphere);
+    const Vec3<double>* a = c.mesh().vertices.data();
+    pin(c);
+    Vec3<double>* b = c.vertexWriteBuffer();
+    std::copy(moved.begin(), moved.end(), b);
+    c.commitVertices();  // now b is current, a the write buffer: a's record went with it
+    EXPECT_EQ(released, 3);
+    EXPECT_EQ(c.hostPin().at(), nullptr);  // b has none yet
+    pin(c);
+    EXPECT_EQ(c.hostPin().at(), b);
+    std::copy(sphere.vertices.begin(), sphere.vertices.end(), c.vertexWriteBuffer());
+    c.commitVertices();  // back to a, with its own record
+    EXPECT_EQ(c.mesh().vertices.data(), a);
+    EXPECT_EQ(c.hostPin().at(), a);
+    EXPECT_TRUE(c.hostPin().pinned());
+    EXPECT_EQ(released, 3);
+    EXPECT_THROW(c.updateVertices({{0, 0, 0}}), InvalidInputError);  // refused: both kept
+    EXPECT_EQ(released, 3);
+    HashedMesh<double> d(std::move(c));  // both buffers and both records move together
+    EXPECT_EQ(released, 3);
+    d.setMesh(makeSphere<double>({0, 0, 0}, 2.0, 8, 4));  // both buffers go: both dropped first
+    EXPECT_EQ(released, 5);
+    EXPECT_EQ(d.hostPin().at(), nullptr);
+    EXPECT_THROW(d.commitVertices(), InvalidInputError);  // the write buffer went too
+    pin(d);
+    std::copy(d.mesh().vertices.begin(), d.mesh().vertices.end(), d.vertexWriteBuffer());
+    d.commitVertices();
+    pin(d);
+  }  // d's destructor drops both records before its buffers go
+  EXPECT_EQ(released, 7);
 }
 
 TEST(HashedMesh, PoseChangesDoNotRehashDeformationsDo) {

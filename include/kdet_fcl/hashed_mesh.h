@@ -35,14 +35,16 @@ class KeptSelfResult;
 
 /// A mesh hashed in its own frame plus a rigid pose.
 ///  - Rigid motion: setPose() costs nothing else; the hash is never rebuilt for a new pose.
-///  - Deformation (same topology): updateVertices() validates and stores the new positions;
-///    the CPU hash is rebuilt in O(n) by the first CPU query that needs it (lazily, so a mesh
-///    queried only on the GPU never pays for a CPU re-hash).
+///  - Deformation (same topology): updateVertices() validates and stores the new positions (a
+///    copy), or a simulation writes them into vertexWriteBuffer() and commitVertices() validates
+///    them in place (no copy); the CPU hash is rebuilt in O(n) by the first CPU query that needs
+///    it (lazily, so a mesh queried only on the GPU never pays for a CPU re-hash).
 ///  - Topology change (fracture, insertion, deletion): setMesh(), likewise.
-/// Not thread-safe for mutation (setPose, updateVertices, setMesh, assignment) while any other
-/// call is in flight. Concurrent const calls (queries, hash(), stats()) from several threads are
-/// safe, also right after a mutation: the first one rebuilds the CPU hash under a lock, the
-/// others wait for it; once the hash is current, a query only checks an atomic flag.
+/// Not thread-safe for mutation (setPose, updateVertices, vertexWriteBuffer, commitVertices,
+/// setMesh, assignment) while any other call is in flight. Concurrent const calls (queries,
+/// hash(), stats()) from several threads are safe, also right after a mutation: the first one
+/// rebuilds the CPU hash under a lock, the others wait for it; once the hash is current, a query
+/// only checks an atomic flag.
 template <class S>
 class HashedMesh {
  public:
@@ -66,6 +68,26 @@ class HashedMesh {
   /// the mesh's own vertex array, which keeps its address (mesh().vertices.data()). Marks the CPU
   /// hash stale: it is rebuilt by the next CPU query (or prepareCpuHash()), not here.
   void updateVertices(const std::vector<Vec3<S>>& vertices);
+
+  /// For a simulation that writes each frame's positions straight into the mesh, with no copy:
+  /// the mesh's second vertex buffer, numVertices() positions whose contents are unspecified (in
+  /// practice the positions of two commits ago). Write every new position there, then call
+  /// commitVertices(). The buffer is allocated on the first call (kept until setMesh); the
+  /// pointer is valid until the next commitVertices(), setMesh() or the mesh's end. After a
+  /// commit it points at the mesh's current positions: call vertexWriteBuffer() again for the
+  /// next frame, never write through the old pointer.
+  Vec3<S>* vertexWriteBuffer();
+
+  /// Makes the positions written into vertexWriteBuffer() the mesh's, as updateVertices() does,
+  /// but without copying them: they are checked in place (one pass), then the two buffers trade
+  /// places (so mesh().vertices.data() alternates between two addresses, and a registration of
+  /// each with a device runtime, detail::HostPin, moves with its buffer). Throws
+  /// InvalidInputError, naming the first non-finite coordinate, and leaves the mesh unchanged
+  /// (its positions, version and hash) when a written coordinate is not finite, or when
+  /// vertexWriteBuffer() was never called since construction or setMesh().
+  void commitVertices();
+
+  std::size_t numVertices() const { return mesh_.vertices.size(); }
 
   /// Replaces the whole mesh (topology change). Validates first; on error the old mesh is kept.
   /// Marks the CPU hash stale, like updateVertices().
@@ -132,11 +154,15 @@ class HashedMesh {
 
   struct Lazy;  // the lock and the "CPU hash is current" flag (on the heap: movable class)
 
-  // Declared before mesh_: a move assignment drops this mesh's registration before it frees
-  // the vertex buffer the registration is for (members are assigned in declaration order); the
-  // destructor and setMesh drop it first too.
+  // Declared before mesh_ and write_buffer_: a move assignment drops this mesh's registrations
+  // before it frees the vertex buffers they are for (members are assigned in declaration order);
+  // the destructor and setMesh drop them first too.
   mutable detail::HostPin host_pin_;
+  mutable detail::HostPin write_pin_;  // the registration of write_buffer_ (commitVertices)
   TriangleMesh<S> mesh_;
+  // The second vertex buffer (vertexWriteBuffer; empty until asked for). Each buffer's pin
+  // record (host_pin_ for mesh_.vertices, write_pin_ for this one) trades places with it.
+  std::vector<Vec3<S>> write_buffer_;
   Transform<S> pose_;
   detail::Aabb<double> bounds_{};
   // Rebuilt in place: the buffers of the last build are reused (a deforming mesh rebuilds

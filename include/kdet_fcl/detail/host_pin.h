@@ -10,7 +10,8 @@ namespace detail {
 
 /// Made by the CUDA backend, owned by the HashedMesh whose vertex buffer it is for, and dropped
 /// by the mesh before that buffer can be freed or replaced (setMesh, move assignment, the
-/// destructor; updateVertices writes into the same buffer and keeps it). Dropping the last
+/// destructor; updateVertices writes into the same buffer and keeps it; commitVertices swaps
+/// the mesh's two buffers and their two records together). Dropping the last
 /// handle runs the backend's release (cudaHostUnregister). The record also says whether the
 /// buffer was seen before (the backend registers a buffer on its second upload, so that a mesh
 /// uploaded once pays no registration) and whether registering it failed (not tried again).
