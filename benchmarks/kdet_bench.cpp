@@ -8,10 +8,12 @@
 /// the library and this program were built with CUDA and a device is present, with a table of
 /// their own against the GPU targets; elsewhere they read "n/a (not built)" or "n/a (no CUDA
 /// device)". The GPU methods keep their objects from run to run (runKdetOnce, runBvhOnce), as
-/// FCL's models are kept (FclCache).
+/// FCL's models are kept (FclCache). kDet's GPU runs take a deforming object's positions as a
+/// simulation that writes them into the mesh's vertexWriteBuffer() does (commitVertices checks
+/// them in place, timed), or with --gpu-update copy through updateVertices (checked and copied).
 ///
 ///   kdet_bench [--quick] [--reps R] [--frames F] [--only a,b] [--methods a,b] [--out DIR]
-///              [--include-1m]
+///              [--include-1m] [--gpu-update commit|copy]
 ///              [--tiny N] [--rigid-poses N] [--no-plots] [--no-kfree]
 ///   kdet_bench --export-scenes DIR [--quick]     (meshes for benchmarks/kfree_study.sh)
 
@@ -176,6 +178,9 @@ struct KdetObjects {
   std::vector<Positions> positions;
 };
 
+/// How kDet's GPU runs take a deforming object's new positions (--gpu-update).
+enum class GpuUpdate { Commit, Copy };
+
 /// One run of kDet over the scene's frames. With `kept` (the GPU runs), the objects live from
 /// run to run, as a simulation's do (and as FCL's cached models, FclCache): the first run builds
 /// them; frame 0 of a later run brings each back to frame 0's state (a deformed object's
@@ -184,10 +189,13 @@ struct KdetObjects {
 /// and the vertex buffer's registration learnt in a mesh's first frames). The GPU runs also hand
 /// updateVertices the positions from one buffer per object that the simulation has just filled
 /// (untimed), as runBvhOnce hands them to the GPU BVH, so that both GPU methods start each frame
-/// from the same place. The hierarchy's height (HashedMesh::stats, which builds a stale CPU hash)
+/// from the same place; with GpuUpdate::Commit that buffer is the mesh's own write buffer
+/// (HashedMesh::vertexWriteBuffer, filled untimed) and the timed update is commitVertices, which
+/// checks the positions in place and copies nothing. The hierarchy's height (HashedMesh::stats, which builds a stale CPU hash)
 /// is taken in the checking run only (`collect`), whose records the tables read it from.
 std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::Backend backend,
-                                     bool collect, KdetObjects* kept = nullptr) {
+                                     bool collect, KdetObjects* kept = nullptr,
+                                     GpuUpdate how = GpuUpdate::Copy) {
   using kdet_fcl::HashedMesh;
   std::vector<FrameRecord> out;
   KdetObjects own;
@@ -201,6 +209,23 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
     if (kept == nullptr) return fr.meshes[o]->vertices;
     return simulationFrame(objects.positions[o], *fr.meshes[o]);
   };
+  // A deforming kept object's new positions: written into its write buffer (untimed), then
+  // committed (timed: t0 is taken after the write).
+  const bool commit = kept != nullptr && how == GpuUpdate::Commit;
+  auto deform = [&](const kb::Frame& fr, std::size_t o, double& update_ms) {
+    if (commit) {
+      const auto& v = fr.meshes[o]->vertices;
+      std::copy(v.begin(), v.end(), obj[o]->vertexWriteBuffer());
+      const auto t0 = Clock::now();
+      obj[o]->commitVertices();
+      update_ms += msSince(t0);
+      return;
+    }
+    const Positions& v = frameVertices(fr, o);
+    const auto t0 = Clock::now();
+    obj[o]->updateVertices(v);  // the re-hash is in the next query
+    update_ms += msSince(t0);
+  };
   kdet_fcl::QueryOptions q;
   q.threads = threads;
   q.backend = backend;
@@ -211,11 +236,10 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
       if (f == 0 && obj[o] != nullptr) {  // a kept object back to frame 0's state
         // Untimed, as below: the fractured mesh's copy, the deformed one's positions.
         const kb::Motion motion = s.motion[o];
+        if (motion == kb::Motion::Deform) deform(fr, o, rec.update_ms);
         kb::Mesh copy = motion == kb::Motion::Fracture ? *fr.meshes[o] : kb::Mesh{};
-        const Positions* v = motion == kb::Motion::Deform ? &frameVertices(fr, o) : nullptr;
         const auto t0 = Clock::now();
-        if (v != nullptr) obj[o]->updateVertices(*v);
-        else if (motion == kb::Motion::Fracture) obj[o]->setMesh(std::move(copy));
+        if (motion == kb::Motion::Fracture) obj[o]->setMesh(std::move(copy));
         obj[o]->setPose(fr.poses[o]);
         rec.update_ms += msSince(t0);
         continue;
@@ -238,10 +262,7 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
         }
         case kb::Motion::Deform: {
           if (fr.meshes[o] == s.frames[f - 1].meshes[o]) break;
-          const Positions& v = frameVertices(fr, o);
-          const auto t0 = Clock::now();
-          obj[o]->updateVertices(v);  // the re-hash is in the next query
-          rec.update_ms += msSince(t0);
+          deform(fr, o, rec.update_ms);  // the re-hash is in the next query
           break;
         }
         case kb::Motion::Fracture: {
@@ -729,6 +750,7 @@ struct Options {
   std::string export_dir;
   std::string command;
   std::vector<std::string> methods;  ///< run only methods whose id contains one of these
+  GpuUpdate gpu_update = GpuUpdate::Commit;  ///< --gpu-update
 };
 
 /// Whether --methods asks for method `id`: a word ending in '$' names a whole id, any other word
@@ -749,7 +771,7 @@ bool methodWanted(const Options& o, const std::string& id) {
   std::fprintf(code ? stderr : stdout,
                "usage: kdet_bench [--quick] [--reps R] [--frames F] [--only name,name] [--out DIR]\n"
                "                  [--include-1m] [--tiny N] [--rigid-poses N] [--rep-budget S]\n"
-               "                  [--no-plots] [--no-kfree]\n"
+               "                  [--no-plots] [--no-kfree] [--gpu-update commit|copy]\n"
                "       kdet_bench --export-scenes DIR [--quick]\n"
                "  --quick        small scenes, 1 run, agreement checked (CI smoke test; not timed)\n"
                "  --reps R       timed repetitions after one warm-up/check run (default 3)\n"
@@ -760,6 +782,9 @@ bool methodWanted(const Options& o, const std::string& id) {
                "                 without it (kdet_cpu_1t always runs; ids: kdet_cpu_1t, kdet_cpu_2t,\n"
                "                 kdet_gpu, fcl_obbrss, fcl_obb, fcl_aabb, gpu_bvh, fcl_obbrss_selfpair)\n"
                "  --out DIR      where bench.md, bench.json, *.dat, *.gp and *.png go (default bench_out)\n"
+               "  --gpu-update commit|copy  how kDet's GPU runs take a deforming object's positions:\n"
+               "                 written into the mesh's write buffer and committed (default), or\n"
+               "                 handed to updateVertices, which copies them\n"
                "The UNC and FCL meshes come from $KDET_FCL_DATA_DIR, else ../shared/data beside the\n"
                "source tree; scenes whose files are missing are left out.\n"
                "Exit code: 0 ok, 1 a disagreement settled against kDet, 2 usage.\n");
@@ -793,6 +818,11 @@ Options parse(int argc, char** argv) {
     else if (a == "--no-plots") o.plots = false;
     else if (a == "--rep-budget") g_rep_budget_s = std::stod(val());
     else if (a == "--no-kfree") o.kfree = false;
+    else if (a == "--gpu-update") {
+      const std::string v = val();
+      if (v != "commit" && v != "copy") usage(2);
+      o.gpu_update = v == "commit" ? GpuUpdate::Commit : GpuUpdate::Copy;
+    }
     else if (a == "--export-scenes") o.export_dir = val();
     else if (a == "--help" || a == "-h") usage(0);
     else usage(2);
@@ -849,7 +879,9 @@ SceneResult runScene(const kb::Scene& s, const Options& o) {
     if (m.status.empty()) {
       m.status = "ok (host timer)";
       KdetObjects kept;  // from run to run (runKdetOnce)
-      repeat(m, o.reps, !methodWanted(o, m.id), s.name, [&](bool c) { return runKdetOnce(s, 0, kdet_fcl::Backend::Cuda, c, &kept); });
+      repeat(m, o.reps, !methodWanted(o, m.id), s.name, [&](bool c) {
+        return runKdetOnce(s, 0, kdet_fcl::Backend::Cuda, c, &kept, o.gpu_update);
+      });
     }
     R.methods.push_back(std::move(m));
   }
@@ -990,7 +1022,7 @@ std::size_t steadyTriangles(const kb::Scene& s) {
 /// and inter query of the frame for both, so totals against totals) and against FCL OBBRSS
 /// (FCL total / kDet GPU comparable, as the CPU's speedup column), with the GPU targets of the
 /// deforming scenes of 90k triangles or more: at least 3x the GPU BVH and 100x FCL.
-void writeGpuTable(std::ofstream& md, const std::vector<SceneResult>& res) {
+void writeGpuTable(std::ofstream& md, const std::vector<SceneResult>& res, GpuUpdate how) {
   bool any = false;
   for (const auto& r : res) any = any || ok(find(r, "kdet_gpu"));
   if (!any) return;
@@ -998,11 +1030,16 @@ void writeGpuTable(std::ofstream& md, const std::vector<SceneResult>& res) {
         "host timer)\n\n";
   md << "GPU: " << kdet_fcl::cudaDeviceDescription(0) << ". Both GPU methods run every self and "
         "inter-object query of the frame in double (the scenes' precision) and read the pairs back, "
-        "with their objects kept from run to run as a simulation keeps them (kDet: updateVertices, "
-        "setMesh, setPose on its HashedMesh objects; the GPU BVH: refit, rebuild), each deforming "
-        "object's new positions handed over from one buffer the simulation has just filled "
-        "(untimed); kDet's update checks and copies them on the host, the GPU BVH's uploads them "
-        "unchecked in its query; "
+        "with their objects kept from run to run as a simulation keeps them (kDet: "
+     << (how == GpuUpdate::Commit ? "commitVertices" : "updateVertices")
+     << ", setMesh, setPose on its HashedMesh objects; the GPU BVH: refit, rebuild), each "
+        "deforming object's new positions written by the simulation (untimed) "
+     << (how == GpuUpdate::Commit
+             ? "into kDet's mesh's write buffer, where its update checks them on the host in "
+               "place, and into a buffer of its own for the GPU BVH, "
+             : "into one buffer per object and method; kDet's update checks them and copies them "
+               "into the mesh on the host, ")
+     << "the GPU BVH's query uploads them unchecked; "
         "\"vs GPU BVH\" is total against total; \"vs FCL\" is FCL OBBRSS total / kDet GPU "
         "comparable, as the CPU speedup. Target (issue 5, deforming scenes of 90k triangles or "
         "more): at least 3× the GPU BVH and 100× FCL.\n\n";
@@ -1072,7 +1109,7 @@ void writeMarkdown(const std::vector<SceneResult>& res, const Options& o, const 
        << std::size_t(k2.pairs) << " | " << agreeCell(r) << " |\n";
   }
 
-  writeGpuTable(md, res);
+  writeGpuTable(md, res, o.gpu_update);
 
   md << "\n### Every method (ms per frame: update / query / total; build = frame 0)\n\n";
   md << "| Scene | frames | method | runs | build | update | query | total | comparable | pairs/frame | vs kDet 1T |\n";

@@ -1,17 +1,21 @@
 // update_bench: the host cost of a deforming frame's HashedMesh::updateVertices, next to its
-// floor and to the way it used to work, in the same process.
+// floor, to commitVertices and to the way it used to work, in the same process.
 //
 // For a draped cloth over a sphere (float, as the GPU benchmarks use) of about 92k, 250k and 1M
 // triangles, alternating between two frames' vertex arrays, the median over --reps calls of:
 //   updateVertices   the library call: one pass that checks every coordinate and gives the
 //                    bounds, then a copy into the mesh's own buffer;
-//   copy only        std::copy of the same array into a buffer of the same size (the floor: the
-//                    call cannot do less than read the input and write the mesh);
+//   copy only        std::copy of the same array into a buffer of the same size (the floor of
+//                    updateVertices: it cannot do less than read the input and write the mesh);
+//   commitVertices   the same positions written into the mesh's vertexWriteBuffer() (untimed,
+//                    as a simulation writes them), then the call: the check and bounds in place,
+//                    the two buffers traded, no copy;
 //   copy, check, move  what updateVertices did before 2026-11-23: a copy into a new vector, the
 //                    check of that copy, the new vector moved into the mesh (the old buffer
 //                    freed), then a second pass for the bounds.
 // Each updateVertices is checked: the mesh must hold exactly the array passed in, in the same
-// buffer as before; a failure exits 1. Results: benchmarks/RESULTS.md.
+// buffer as before; each commitVertices: the mesh must hold the written positions in the buffer
+// they were written into. A failure exits 1. Results: benchmarks/RESULTS.md.
 //
 // Usage: update_bench [--reps R] [--max-n N]   (N: the largest cloth grid side, default 700)
 
@@ -66,15 +70,15 @@ int main(int argc, char** argv) {
   using S = float;
   using kdet_fcl::Vec3;
   std::printf("| triangles | vertex bytes | updateVertices (us) | copy only (us) | "
-              "copy, check, move (us) |\n|---:|---:|---:|---:|---:|\n");
+              "commitVertices (us) | copy, check, move (us) |\n|---:|---:|---:|---:|---:|---:|\n");
   for (int n : {215, 354, 700}) {
     n = std::min(n, max_n);
     const kdet_fcl::TriangleMesh<S> f0 = kdet_fcl::makeDrapedCloth<S>(n, 4, 1, S(0.03), S(0.5));
     const std::vector<Vec3<S>> f1 = kdet_fcl::makeDrapedCloth<S>(n, 4, 1, S(0.03), S(0.7)).vertices;
-    kdet_fcl::HashedMesh<S> mesh(f0);
+    kdet_fcl::HashedMesh<S> mesh(f0), committed(f0);
     const Vec3<S>* buffer = mesh.mesh().vertices.data();
     std::vector<Vec3<S>> dst = f0.vertices, held = f0.vertices;
-    std::vector<double> upd, copy, old;
+    std::vector<double> upd, copy, commit, old;
     volatile double sink = 0;
     for (int r = 0; r <= reps; ++r) {  // the first round warms up and is not counted
       const std::vector<Vec3<S>>& v = r % 2 ? f1 : f0.vertices;
@@ -84,6 +88,13 @@ int main(int argc, char** argv) {
         return 1;
       }
       const double tc = timeUs([&] { std::copy(v.begin(), v.end(), dst.begin()); });
+      Vec3<S>* w = committed.vertexWriteBuffer();
+      std::copy(v.begin(), v.end(), w);  // the simulation's write (untimed)
+      const double tm = timeUs([&] { committed.commitVertices(); });
+      if (committed.mesh().vertices != v || committed.mesh().vertices.data() != w) {
+        std::fprintf(stderr, "update_bench: commitVertices did not make the written buffer the mesh's\n");
+        return 1;
+      }
       const double to = timeUs([&] {
         kdet_fcl::TriangleMesh<S> probe;
         probe.vertices = v;
@@ -101,10 +112,12 @@ int main(int argc, char** argv) {
       if (r == 0) continue;
       upd.push_back(tu);
       copy.push_back(tc);
+      commit.push_back(tm);
       old.push_back(to);
     }
-    std::printf("| %zu | %zu | %.0f | %.0f | %.0f |\n", f0.triangles.size(),
-                f0.vertices.size() * sizeof(Vec3<S>), median(upd), median(copy), median(old));
+    std::printf("| %zu | %zu | %.0f | %.0f | %.0f | %.0f |\n", f0.triangles.size(),
+                f0.vertices.size() * sizeof(Vec3<S>), median(upd), median(copy), median(commit),
+                median(old));
     std::fflush(stdout);
     if (n == max_n) break;
   }
