@@ -13,7 +13,7 @@
 /// them in place, timed), or with --gpu-update copy through updateVertices (checked and copied).
 ///
 ///   kdet_bench [--quick] [--reps R] [--frames F] [--only a,b] [--methods a,b] [--out DIR]
-///              [--include-1m] [--gpu-update commit|copy]
+///              [--include-1m] [--gpu-update commit|copy] [--fresh-results]
 ///              [--tiny N] [--rigid-poses N] [--no-plots] [--no-kfree]
 ///   kdet_bench --export-scenes DIR [--quick]     (meshes for benchmarks/kfree_study.sh)
 
@@ -102,6 +102,7 @@ double median(std::vector<double> v) {
 /// Runs `once(collect)` reps+1 times (first: warm-up and checking run, pairs kept) and keeps the
 /// per-frame medians of the timed runs. With reps == 0 the checking run's times are reported.
 double g_rep_budget_s = 20;  ///< --rep-budget: seconds of timed runs per method and scene
+bool g_fresh_results = false;  ///< --fresh-results: the GPU runs' queries return new results
 
 template <class F>
 void repeat(MethodResult& r, int reps, bool skip, const std::string& scene, F once) {
@@ -176,6 +177,10 @@ const Positions& simulationFrame(Positions& buffer, const kb::Mesh& m) {
 struct KdetObjects {
   std::vector<std::unique_ptr<kdet_fcl::HashedMesh<double>>> obj;
   std::vector<Positions> positions;
+  /// One result per query of a frame (the inter queries, then the self queries), kept from
+  /// frame to frame as a simulation keeps them: each query reads its pairs back into its
+  /// result's storage (intersectMeshes and intersectSelf into a result), as the GPU BVH's do.
+  std::vector<kdet_fcl::QueryResult> results;
 };
 
 /// How kDet's GPU runs take a deforming object's new positions (--gpu-update).
@@ -191,8 +196,10 @@ enum class GpuUpdate { Commit, Copy };
 /// (untimed), as runBvhOnce hands them to the GPU BVH, so that both GPU methods start each frame
 /// from the same place; with GpuUpdate::Commit that buffer is the mesh's own write buffer
 /// (HashedMesh::vertexWriteBuffer, filled untimed) and the timed update is commitVertices, which
-/// checks the positions in place and copies nothing. The hierarchy's height (HashedMesh::stats, which builds a stale CPU hash)
-/// is taken in the checking run only (`collect`), whose records the tables read it from.
+/// checks the positions in place and copies nothing. The hierarchy's height (HashedMesh::stats,
+/// which builds a stale CPU hash) is taken in the checking run only (`collect`), whose records
+/// the tables read it from. The GPU runs read each query's pairs back into a result kept from
+/// frame to frame (KdetObjects::results).
 std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::Backend backend,
                                      bool collect, KdetObjects* kept = nullptr,
                                      GpuUpdate how = GpuUpdate::Copy) {
@@ -274,23 +281,32 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
         }
       }
     }
+    // The query's result: new (CPU runs, --fresh-results) or the kept one of its slot (GPU runs).
+    const bool keep = kept != nullptr && !g_fresh_results;
+    objects.results.resize(s.inter.size() + s.self.size());
+    std::size_t slot = 0;
+    kdet_fcl::QueryResult fresh;
     for (auto [a, b] : s.inter) {
+      kdet_fcl::QueryResult& r = keep ? objects.results[slot++] : fresh;
       const auto t0 = Clock::now();
-      kdet_fcl::QueryResult r = kdet_fcl::intersectMeshes(*obj[a], *obj[b], q);
+      if (keep) kdet_fcl::intersectMeshes(*obj[a], *obj[b], r, q);
+      else r = kdet_fcl::intersectMeshes(*obj[a], *obj[b], q);
       rec.inter_ms += msSince(t0);
       rec.inter_pairs += r.pairs.size();
       rec.box_tests += r.stats.box_tests;
       rec.triangle_tests += r.stats.triangle_tests;
-      if (collect) rec.inter_sets.push_back(sorted(std::move(r.pairs)));
+      if (collect) rec.inter_sets.push_back(sorted(r.pairs));
     }
     for (int o : s.self) {
+      kdet_fcl::QueryResult& r = keep ? objects.results[slot++] : fresh;
       const auto t0 = Clock::now();
-      kdet_fcl::QueryResult r = kdet_fcl::intersectSelf(*obj[o], q);
+      if (keep) kdet_fcl::intersectSelf(*obj[o], r, q);
+      else r = kdet_fcl::intersectSelf(*obj[o], q);
       rec.self_ms += msSince(t0);
       rec.self_pairs += r.pairs.size();
       rec.box_tests += r.stats.box_tests;
       rec.triangle_tests += r.stats.triangle_tests;
-      if (collect) rec.self_sets.push_back(sorted(std::move(r.pairs)));
+      if (collect) rec.self_sets.push_back(sorted(r.pairs));
     }
     if (collect)
       for (auto& h : obj) rec.height = std::max(rec.height, h->stats().height);
@@ -310,10 +326,12 @@ std::vector<FrameRecord> runKdetOnce(const kb::Scene& s, int threads, kdet_fcl::
 /// straight from it (GpuBvh::setStableSources; kDet registers its meshes' own buffers so).
 /// Filling that buffer is the simulation's work, not the baseline's: untimed. The trees and
 /// buffers live from run to run (`kept`), as kDet's GPU objects do (runKdetOnce): frame 0 of a
-/// later run refits a deformed object to frame 0's positions and rebuilds a fractured one.
+/// later run refits a deformed object to frame 0's positions and rebuilds a fractured one. Each
+/// query reads its pairs back into a result kept from frame to frame, as kDet's GPU runs do.
 struct BvhObjects {
   std::vector<std::unique_ptr<kdet_bvh::GpuBvh<double>>> tree;
   std::vector<Positions> positions;
+  std::vector<PairList> results;  ///< one per query of a frame, kept (as KdetObjects::results)
 };
 
 std::vector<FrameRecord> runBvhOnce(const kb::Scene& s, bool collect, BvhObjects& kept) {
@@ -351,19 +369,28 @@ std::vector<FrameRecord> runBvhOnce(const kb::Scene& s, bool collect, BvhObjects
       obj[o]->updateVertices(v);
       rec.update_ms += msSince(t0);
     }
+    // Each query reads its pairs back into the storage of its kept result (`keep`), or into a
+    // new one (--fresh-results).
+    kept.results.resize(s.inter.size() + s.self.size());
+    std::size_t slot = 0;
+    PairList* const none = nullptr;
     for (auto [a, b] : s.inter) {
+      PairList& p = kept.results[slot++];
       const auto t0 = Clock::now();
-      PairList p = kdet_bvh::intersect(*obj[a], pose[a], *obj[b], pose[b]);
+      p = kdet_bvh::intersect(*obj[a], pose[a], *obj[b], pose[b], kdet_fcl::Predicate::Exact,
+                              g_fresh_results ? none : &p);
       rec.inter_ms += msSince(t0);
       rec.inter_pairs += p.size();
-      if (collect) rec.inter_sets.push_back(std::move(p));  // (sorted by (a, b) already)
+      if (collect) rec.inter_sets.push_back(p);  // (sorted by (a, b) already)
     }
     for (int o : s.self) {
+      PairList& p = kept.results[slot++];
       const auto t0 = Clock::now();
-      PairList p = kdet_bvh::intersectSelf(*obj[o]);
+      p = kdet_bvh::intersectSelf(*obj[o], kdet_fcl::Predicate::Exact, 0,
+                                  g_fresh_results ? none : &p);
       rec.self_ms += msSince(t0);
       rec.self_pairs += p.size();
-      if (collect) rec.self_sets.push_back(std::move(p));
+      if (collect) rec.self_sets.push_back(p);
     }
     out.push_back(std::move(rec));
   }
@@ -751,7 +778,9 @@ struct Options {
   std::string command;
   std::vector<std::string> methods;  ///< run only methods whose id contains one of these
   GpuUpdate gpu_update = GpuUpdate::Commit;  ///< --gpu-update
+  bool fresh_results = false;  ///< --fresh-results: the GPU runs' queries return new results
 };
+
 
 /// Whether --methods asks for method `id`: a word ending in '$' names a whole id, any other word
 /// any id containing it (so "fcl_obbrss$" runs FCL OBBRSS without its mesh-against-itself twin).
@@ -771,7 +800,7 @@ bool methodWanted(const Options& o, const std::string& id) {
   std::fprintf(code ? stderr : stdout,
                "usage: kdet_bench [--quick] [--reps R] [--frames F] [--only name,name] [--out DIR]\n"
                "                  [--include-1m] [--tiny N] [--rigid-poses N] [--rep-budget S]\n"
-               "                  [--no-plots] [--no-kfree] [--gpu-update commit|copy]\n"
+               "                  [--no-plots] [--no-kfree] [--gpu-update commit|copy] [--fresh-results]\n"
                "       kdet_bench --export-scenes DIR [--quick]\n"
                "  --quick        small scenes, 1 run, agreement checked (CI smoke test; not timed)\n"
                "  --reps R       timed repetitions after one warm-up/check run (default 3)\n"
@@ -785,6 +814,8 @@ bool methodWanted(const Options& o, const std::string& id) {
                "  --gpu-update commit|copy  how kDet's GPU runs take a deforming object's positions:\n"
                "                 written into the mesh's write buffer and committed (default), or\n"
                "                 handed to updateVertices, which copies them\n"
+               "  --fresh-results  the GPU methods' queries return new results (default: each reads\n"
+               "                 its pairs back into a result kept from frame to frame)\n"
                "The UNC and FCL meshes come from $KDET_FCL_DATA_DIR, else ../shared/data beside the\n"
                "source tree; scenes whose files are missing are left out.\n"
                "Exit code: 0 ok, 1 a disagreement settled against kDet, 2 usage.\n");
@@ -818,6 +849,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--no-plots") o.plots = false;
     else if (a == "--rep-budget") g_rep_budget_s = std::stod(val());
     else if (a == "--no-kfree") o.kfree = false;
+    else if (a == "--fresh-results") o.fresh_results = true;
     else if (a == "--gpu-update") {
       const std::string v = val();
       if (v != "commit" && v != "copy") usage(2);
@@ -1022,15 +1054,18 @@ std::size_t steadyTriangles(const kb::Scene& s) {
 /// and inter query of the frame for both, so totals against totals) and against FCL OBBRSS
 /// (FCL total / kDet GPU comparable, as the CPU's speedup column), with the GPU targets of the
 /// deforming scenes of 90k triangles or more: at least 3x the GPU BVH and 100x FCL.
-void writeGpuTable(std::ofstream& md, const std::vector<SceneResult>& res, GpuUpdate how) {
+void writeGpuTable(std::ofstream& md, const std::vector<SceneResult>& res, GpuUpdate how,
+                   bool fresh_results) {
   bool any = false;
   for (const auto& r : res) any = any || ok(find(r, "kdet_gpu"));
   if (!any) return;
   md << "\n### GPU: kDet's CUDA backend against the GPU BVH baseline and FCL (same run; ms per frame, "
         "host timer)\n\n";
   md << "GPU: " << kdet_fcl::cudaDeviceDescription(0) << ". Both GPU methods run every self and "
-        "inter-object query of the frame in double (the scenes' precision) and read the pairs back, "
-        "with their objects kept from run to run as a simulation keeps them (kDet: "
+        "inter-object query of the frame in double (the scenes' precision) and read the pairs back "
+     << (fresh_results ? "into new results (--fresh-results), "
+                       : "into results kept from frame to frame, ")
+     << "with their objects kept from run to run as a simulation keeps them (kDet: "
      << (how == GpuUpdate::Commit ? "commitVertices" : "updateVertices")
      << ", setMesh, setPose on its HashedMesh objects; the GPU BVH: refit, rebuild), each "
         "deforming object's new positions written by the simulation (untimed) "
@@ -1109,7 +1144,7 @@ void writeMarkdown(const std::vector<SceneResult>& res, const Options& o, const 
        << std::size_t(k2.pairs) << " | " << agreeCell(r) << " |\n";
   }
 
-  writeGpuTable(md, res, o.gpu_update);
+  writeGpuTable(md, res, o.gpu_update, o.fresh_results);
 
   md << "\n### Every method (ms per frame: update / query / total; build = frame 0)\n\n";
   md << "| Scene | frames | method | runs | build | update | query | total | comparable | pairs/frame | vs kDet 1T |\n";
@@ -1392,6 +1427,7 @@ int exportScenes(const Options& o) {
 
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
+  g_fresh_results = o.fresh_results;
   try {
     if (!o.export_dir.empty()) return exportScenes(o);
     const std::string load_before = loadAvg();
