@@ -781,7 +781,6 @@ struct Options {
   bool fresh_results = false;  ///< --fresh-results: the GPU runs' queries return new results
 };
 
-
 /// Whether --methods asks for method `id`: a word ending in '$' names a whole id, any other word
 /// any id containing it (so "fcl_obbrss$" runs FCL OBBRSS without its mesh-against-itself twin).
 bool methodWanted(const Options& o, const std::string& id) {
