@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "fcl/mesh_cache.h"
 #include "fcl_test_util.h"
 #include "test_util.h"
 
@@ -22,6 +23,25 @@ struct Scene {
   TriangleMesh<double> ball = kdet_fcl::makeSphere<double>({0, 0, 0}, 1.0, 32, 16);
   TriangleMesh<double> cloth = kdet_fcl::makeDrapedCloth<double>(24, 3.0, 1.0, 0.05, 1.0);
 };
+
+/// Every intersecting pair of two FCL models' current data (world = model frame), by brute force.
+template <class BV>
+Pairs bruteForcePairs(const fcl::BVHModel<BV>& a, const fcl::BVHModel<BV>& b) {
+  auto toMesh = [](const fcl::BVHModel<BV>& m) {
+    TriangleMesh<double> t;
+    for (int i = 0; i < m.num_vertices; ++i)
+      t.vertices.push_back({m.vertices[i][0], m.vertices[i][1], m.vertices[i][2]});
+    for (int i = 0; i < m.num_tris; ++i)
+      t.triangles.push_back({std::uint32_t(m.tri_indices[i][0]), std::uint32_t(m.tri_indices[i][1]),
+                             std::uint32_t(m.tri_indices[i][2])});
+    return t;
+  };
+  Pairs p;
+  for (const auto& q : kdet_fcl::bruteForceIntersectMeshes(toMesh(a), {}, toMesh(b), {}))
+    p.emplace_back(long(q.a), long(q.b));
+  std::sort(p.begin(), p.end());
+  return p;
+}
 
 }  // namespace
 
@@ -222,4 +242,111 @@ TEST(FclMesh, NaNVerticesThrowOnQueryNotOnBuild) {
   EXPECT_THROW(kdet_fcl::collide<double>(&m, fcl::Transform3d::Identity(), &m,
                                          fcl::Transform3d::Identity(), req, res),
                kdet_fcl::InvalidInputError);
+}
+
+// A deformation (the update or replace family) brings the new positions into the kDet hash
+// without a new mesh: its HashedMesh keeps its topology version (so the CUDA backend keeps its
+// copy of the triangles), and only a new model (beginModel ... endModel) or notifyDeformed() gives
+// a new one. Every answer equals brute force on the model's current data. A NaN brought in by an update is refused by the next query with the
+// vertex named, and the hash keeps the positions before it.
+TEST(FclMesh, DeformationsKeepTheHashedTrianglesAndNewModelsReplaceThem) {
+  Scene s;
+  auto km = makeModel<kdet_fcl::Meshd>(s.cloth);
+  auto ball = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(s.ball);
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  const auto& entry = kdet_fcl::detail::MeshAccess<double>::entry(*km);
+  ASSERT_TRUE(entry->hashed != nullptr);  // hashed by endModel
+  const std::uint64_t mesh_topology = km->topologyVersion();
+  const std::uint64_t hashed_topology = entry->hashed->topologyVersion();
+  // The replace family (FCL allows it only before the first update): vertices only.
+  km->beginReplaceModel();
+  km->replaceSubModel(shifted(s.cloth, -0.25));
+  ASSERT_EQ(km->endReplaceModel(), fcl::BVH_OK);
+  std::size_t pairs = kdetPairs<double>(km.get(), I, ball.get(), I).size();
+  EXPECT_EQ(kdetPairs<double>(km.get(), I, ball.get(), I), bruteForcePairs(*km, *ball));
+  EXPECT_EQ(entry->hashed->topologyVersion(), hashed_topology);
+  EXPECT_EQ(km->topologyVersion(), mesh_topology);
+  for (double dz : {-0.1, -0.2, -0.3, 0.05}) {
+    const std::uint64_t v0 = entry->hashed->version();
+    km->beginUpdateModel();
+    km->updateSubModel(shifted(s.cloth, dz));
+    ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+    const Pairs got = kdetPairs<double>(km.get(), I, ball.get(), I);
+    EXPECT_EQ(got, bruteForcePairs(*km, *ball)) << dz;
+    pairs += got.size();
+    EXPECT_EQ(km->topologyVersion(), mesh_topology) << dz;
+    EXPECT_EQ(entry->hashed->topologyVersion(), hashed_topology) << dz;
+    EXPECT_GT(entry->hashed->version(), v0) << dz;
+    EXPECT_EQ(entry->hashed->mesh().vertices[3].z, km->vertices[3][2]) << dz;
+  }
+  EXPECT_GT(pairs, 0u);  // the frames test something
+  // A NaN: FCL refits it; the next kdet_fcl query refuses it, naming the vertex, and the hash
+  // keeps the last good positions; the next good update is taken in.
+  const std::vector<kdet_fcl::Vec3<double>> good = entry->hashed->mesh().vertices;
+  auto bad = shifted(s.cloth, -0.15);
+  bad[7][0] = std::nan("");
+  km->beginUpdateModel();
+  km->updateSubModel(bad);
+  ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+  try {
+    (void)kdetPairs<double>(km.get(), I, ball.get(), I);
+    ADD_FAILURE() << "a NaN vertex was accepted";
+  } catch (const kdet_fcl::InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("kdet_fcl: BVHModel"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("vertex 7"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(entry->hashed->mesh().vertices, good);
+  km->beginUpdateModel();
+  km->updateSubModel(shifted(s.cloth, -0.15));
+  ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+  EXPECT_EQ(kdetPairs<double>(km.get(), I, ball.get(), I), bruteForcePairs(*km, *ball));
+  EXPECT_EQ(entry->hashed->topologyVersion(), hashed_topology);
+  // Triangles written directly and announced: a new topology, the new triangles hashed.
+  std::swap(km->tri_indices[0], km->tri_indices[km->num_tris / 2]);
+  for (int t = 1; t < km->num_tris; t += 2) {
+    const fcl::Triangle r = km->tri_indices[t];
+    km->tri_indices[t] = fcl::Triangle(r[0], r[2], r[1]);
+  }
+  km->tri_indices[km->num_tris - 1] = fcl::Triangle(0, std::size_t(km->num_vertices) / 2, std::size_t(km->num_vertices) - 1);
+  km->notifyDeformed();
+  EXPECT_GT(km->topologyVersion(), mesh_topology);
+  EXPECT_EQ(kdetPairs<double>(km.get(), I, ball.get(), I), bruteForcePairs(*km, *ball));
+  EXPECT_NE(entry->hashed->topologyVersion(), hashed_topology);
+  EXPECT_EQ(entry->hashed->mesh().triangles.back()[1], std::uint32_t(km->num_vertices / 2));
+  // A new model: a new topology.
+  const std::uint64_t t1 = entry->hashed->topologyVersion();
+  km->beginModel();
+  km->beginModel();  // (FCL's first call on a built model only clears it)
+  std::vector<fcl::Triangle> ts;
+  for (const auto& t : s.ball.triangles) ts.emplace_back(t[0], t[1], t[2]);
+  km->addSubModel(shifted(s.ball, 0.5), ts);
+  ASSERT_EQ(km->endModel(), fcl::BVH_OK);
+  EXPECT_NE(entry->hashed->topologyVersion(), t1);
+  EXPECT_EQ(entry->hashed->numTriangles(), s.ball.triangles.size());
+  EXPECT_EQ(kdetPairs<double>(km.get(), I, ball.get(), I), bruteForcePairs(*km, *ball));
+  kdet_fcl::forget<double>(ball.get());
+}
+
+// A plain BVHModel under CacheValidation::Checksum: positions written in place are taken in as a
+// deformation, and triangles written in place (same arrays, same counts) as a new mesh, each
+// answered as brute force answers the model's current data.
+TEST(FclMesh, APlainModelsTrianglesWrittenInPlaceAreHashedAnew) {
+  Scene s;
+  ASSERT_EQ(kdet_fcl::cacheValidation(), kdet_fcl::CacheValidation::Checksum);
+  auto cloth = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(s.cloth);
+  auto ball = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(s.ball);
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  EXPECT_EQ(kdetPairs<double>(cloth.get(), I, ball.get(), I), bruteForcePairs(*cloth, *ball));
+  for (int i = 0; i < cloth->num_vertices; ++i) cloth->vertices[i][2] -= 0.2;  // deformed
+  const Pairs deformed = kdetPairs<double>(cloth.get(), I, ball.get(), I);
+  EXPECT_EQ(deformed, bruteForcePairs(*cloth, *ball));
+  ASSERT_FALSE(deformed.empty());
+  // Each triangle that meets the ball now spans far-apart vertices of the cloth.
+  for (const auto& p : deformed)
+    cloth->tri_indices[p.first] = fcl::Triangle(0, std::size_t(cloth->num_vertices) - 1, 24);
+  const Pairs rewired = kdetPairs<double>(cloth.get(), I, ball.get(), I);
+  EXPECT_EQ(rewired, bruteForcePairs(*cloth, *ball));
+  EXPECT_NE(rewired, deformed);
+  kdet_fcl::forget<double>(cloth.get());
+  kdet_fcl::forget<double>(ball.get());
 }

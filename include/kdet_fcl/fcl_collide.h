@@ -47,10 +47,15 @@
 ///    num_tris, and a 64-bit checksum of the vertex and triangle arrays. O(n) memory reads per
 ///    query (a few microseconds per 10k triangles, far below a re-hash), and never stale:
 ///    beginUpdateModel's pointer swap, replace/update calls, direct writes into `vertices`, and a
-///    new model at a recycled address are all seen. Any change re-hashes that model (O(n)).
+///    new model at a recycled address are all seen. Any change re-hashes that model (O(n)); when
+///    only the vertices changed (the same triangle array, counts and triangle checksum), the new
+///    positions go straight into the model's HashedMesh (commitVertices) and its triangles are
+///    neither copied nor checked again.
 ///  - CacheValidation::Trust: only pointers and counts are compared (O(1)). After changing
 ///    vertices in place (replace/update calls, direct writes) call notifyDeformed(model).
-/// kdet_fcl::Mesh<S> never needs either: it bumps a version in its own end*Model methods.
+/// kdet_fcl::Mesh<S> never needs either: it bumps a version in its own end*Model methods, and a
+/// topology version in beginModel/endModel and notifyDeformed only, so its update and replace
+/// families take the vertices-only path too.
 /// Entries live until forget(model) or clearCache(); call forget() before deleting a model that
 /// will not be queried again (a stale entry at a recycled address is detected, but keeps memory).
 /// Thread safety: queries may run concurrently from any threads; the cache has a mutex, and each

@@ -124,9 +124,17 @@ class Mesh : public fcl::BVHModel<fcl::OBBRSS<S>> {
 
   /// Incremented by every (re)build or deformation; kdet_fcl's queries re-hash when it changes.
   std::uint64_t version() const { return version_; }
-  /// Marks the geometry changed (after direct writes into `vertices`, or FCL calls made through a
-  /// base-class pointer).
-  void notifyDeformed() { ++version_; }
+  /// Incremented when the triangles may have changed: by beginModel/endModel and
+  /// notifyDeformed(), not by the update and replace families (which move vertices only). While
+  /// it stays, kdet_fcl takes a deformation's new positions into the kDet hash without copying or
+  /// checking the triangles again (HashedMesh::commitVertices), and the CUDA backend keeps them.
+  std::uint64_t topologyVersion() const { return topology_version_; }
+  /// Marks the geometry changed (after direct writes into `vertices` or `tri_indices`, or FCL
+  /// calls made through a base-class pointer); the triangles count as changed too.
+  void notifyDeformed() {
+    ++version_;
+    ++topology_version_;
+  }
 
  private:
   friend struct detail::MeshAccess<S>;
@@ -134,6 +142,7 @@ class Mesh : public fcl::BVHModel<fcl::OBBRSS<S>> {
 
   MeshMode mode_ = MeshMode::Fcl;
   std::uint64_t version_ = 1;
+  std::uint64_t topology_version_ = 1;
   int num_changed_ = 0;     // vertices given since begin{Replace,Update}Model
   bool fcl_stale_ = false;  // KdetOnly: FCL's BVH not refitted since the last change
   std::shared_ptr<detail::FclMeshEntry<S>> entry_;

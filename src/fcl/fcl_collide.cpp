@@ -100,11 +100,16 @@ std::uint64_t checksumBytes(const void* data, std::size_t bytes, std::uint64_t s
   return r;
 }
 
+/// The checksums of a model's vertices and of its triangles (apart, so that a deformation, whose
+/// triangles stay, can be told from a new mesh).
+struct ModelChecksums {
+  std::uint64_t vertices = 0, triangles = 0;
+};
+
 template <class S>
-std::uint64_t checksumOf(const FclMeshView<S>& v) {
-  const std::uint64_t a =
-      checksumBytes(v.vertices, sizeof(fcl::Vector3<S>) * std::size_t(v.num_vertices), 1);
-  return checksumBytes(v.triangles, sizeof(fcl::Triangle) * std::size_t(v.num_tris), a);
+ModelChecksums checksumsOf(const FclMeshView<S>& v) {
+  return {checksumBytes(v.vertices, sizeof(fcl::Vector3<S>) * std::size_t(v.num_vertices), 1),
+          checksumBytes(v.triangles, sizeof(fcl::Triangle) * std::size_t(v.num_tris), 2)};
 }
 
 template <class S>
@@ -153,27 +158,49 @@ void syncEntry(FclMeshEntry<S>& e, const FclMeshView<S>& v) {
         "kdet_fcl: a BVHModel that is not built (call endModel, endUpdateModel or "
         "endReplaceModel before querying it)");
   const bool dirty = e.dirty.exchange(false);
-  const bool same_shape = e.hashed && e.vertices == v.vertices && e.triangles == v.triangles &&
-                          e.num_vertices == v.num_vertices && e.num_tris == v.num_tris;
-  std::uint64_t checksum = 0;
+  // Same triangle array and counts (FCL's update family swaps the vertex array with the previous
+  // frame's, so the vertex pointer alone may change).
+  const bool same_triangles = e.hashed && e.triangles == v.triangles &&
+                              e.num_vertices == v.num_vertices && e.num_tris == v.num_tris;
+  const bool same_shape = same_triangles && e.vertices == v.vertices;
+  ModelChecksums sums;
   bool unchanged;
+  bool vertices_only = false;  // a deformation: the triangles are the ones hashed
   if (v.kdet_mesh != nullptr) {
     unchanged = same_shape && !dirty && e.mesh_version == v.kdet_mesh->version();
+    vertices_only = same_triangles && e.mesh_topology == v.kdet_mesh->topologyVersion();
   } else if (g_validation.load(std::memory_order_relaxed) == CacheValidation::Checksum) {
-    checksum = checksumOf(v);
-    unchanged = same_shape && !dirty && e.checksum == checksum;
+    sums = checksumsOf(v);
+    unchanged = same_shape && !dirty && e.vertex_checksum == sums.vertices &&
+                e.triangle_checksum == sums.triangles;
+    vertices_only = same_triangles && e.triangle_checksum == sums.triangles;
   } else {
     unchanged = same_shape && !dirty;
   }
   if (unchanged) return;
   try {
-    TriangleMesh<S> mesh = toTriangleMesh(v);
-    mesh.validate(false, "kdet_fcl: BVHModel");
-    if (e.hashed) {
-      e.hashed->setMesh(std::move(mesh));
+    if (vertices_only) {
+      // The new positions straight into the hash's write buffer, checked there; the triangles
+      // (validated when they were hashed) are neither copied nor checked again, and keep the
+      // mesh's topology version, so the CUDA backend keeps its copy of them.
+      Vec3<S>* w = e.hashed->vertexWriteBuffer();
+      for (int i = 0; i < v.num_vertices; ++i)
+        w[i] = {v.vertices[i][0], v.vertices[i][1], v.vertices[i][2]};
+      try {
+        e.hashed->commitVertices();
+      } catch (const InvalidInputError&) {
+        toTriangleMesh(v).validate(false, "kdet_fcl: BVHModel");  // the message of a new mesh
+        throw;
+      }
     } else {
-      e.hashed = std::make_unique<HashedMesh<S>>(std::move(mesh), Transform<S>::identity(),
-                                                 collideOptions().threads);
+      TriangleMesh<S> mesh = toTriangleMesh(v);
+      mesh.validate(false, "kdet_fcl: BVHModel");
+      if (e.hashed) {
+        e.hashed->setMesh(std::move(mesh));
+      } else {
+        e.hashed = std::make_unique<HashedMesh<S>>(std::move(mesh), Transform<S>::identity(),
+                                                   collideOptions().threads);
+      }
     }
   } catch (...) {
     if (dirty) e.dirty.store(true);
@@ -186,8 +213,11 @@ void syncEntry(FclMeshEntry<S>& e, const FclMeshView<S>& v) {
   e.num_tris = v.num_tris;
   if (v.kdet_mesh != nullptr) {
     e.mesh_version = v.kdet_mesh->version();
+    e.mesh_topology = v.kdet_mesh->topologyVersion();
   } else {
-    e.checksum = g_validation.load() == CacheValidation::Checksum ? checksum : checksumOf(v);
+    if (g_validation.load() != CacheValidation::Checksum) sums = checksumsOf(v);
+    e.vertex_checksum = sums.vertices;
+    e.triangle_checksum = sums.triangles;
   }
 }
 

@@ -23,6 +23,7 @@ Mesh<S>::Mesh(const Mesh& other)
     : Base(other),
       mode_(other.mode_),
       version_(other.version_),
+      topology_version_(other.topology_version_),
       num_changed_(other.num_changed_),
       fcl_stale_(other.fcl_stale_),
       entry_(std::make_shared<detail::FclMeshEntry<S>>()) {}
@@ -52,6 +53,7 @@ int Mesh<S>::endChange(int code) {
 template <class S>
 int Mesh<S>::beginModel(int num_tris, int num_vertices) {
   ++version_;
+  ++topology_version_;
   fcl_stale_ = false;
   return Base::beginModel(num_tris, num_vertices);
 }
@@ -61,6 +63,7 @@ int Mesh<S>::endModel() {
   // FCL's BVH is always built here (KdetOnly skips only refits): a later refitFcl() needs it.
   const int code = Base::endModel();
   fcl_stale_ = false;
+  ++topology_version_;
   return endChange(code);
 }
 

@@ -43,8 +43,10 @@ struct FclMeshEntry {
   const void* vertices = nullptr;
   const void* triangles = nullptr;
   int num_vertices = -1, num_tris = -1;
-  std::uint64_t checksum = 0;      ///< plain models, CacheValidation::Checksum
-  std::uint64_t mesh_version = 0;  ///< kdet_fcl::Mesh
+  std::uint64_t vertex_checksum = 0;    ///< plain models, CacheValidation::Checksum
+  std::uint64_t triangle_checksum = 0;  ///< plain models, CacheValidation::Checksum
+  std::uint64_t mesh_version = 0;   ///< kdet_fcl::Mesh
+  std::uint64_t mesh_topology = 0;  ///< kdet_fcl::Mesh::topologyVersion()
   std::atomic<bool> dirty{false};  ///< notifyDeformed() was called
 };
 
