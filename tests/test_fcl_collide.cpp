@@ -813,6 +813,16 @@ TEST(FclCollideBackend, CudaBackendThroughCollideAndSelfCollide) {
     fcl::CollisionResultd gpu_self;
     kdet_fcl::selfCollide(&oc, req, gpu_self);
     EXPECT_EQ(pairsOf(gpu_self), pairsOf(cpu_self));
+    // The cloth deformed in place (seen by the checksum, taken in as new positions only): each
+    // frame's GPU contacts equal the CPU's.
+    for (double dz : {-0.1, -0.2, 0.15}) {
+      for (int i = 0; i < mc->num_vertices; ++i) mc->vertices[i][2] += dz;
+      const Pairs on_gpu = kdetPairs<double>(mc.get(), I, ms.get(), I);
+      kdet_fcl::setCollideOptions(saved);
+      EXPECT_EQ(on_gpu, kdetPairs<double>(mc.get(), I, ms.get(), I)) << dz;
+      EXPECT_FALSE(on_gpu.empty()) << dz;
+      kdet_fcl::setCollideOptions(gpu);
+    }
   }
   kdet_fcl::setCollideOptions(saved);
 }
