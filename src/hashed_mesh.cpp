@@ -189,6 +189,19 @@ bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int 
   return e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0);
 }
 
+/// The bounds of the new positions `v` (finiteBounds in vertexThreads' threads), or
+/// InvalidInputError naming the first non-finite coordinate, prefixed by `what` (updateVertices,
+/// commitVertices).
+template <class S>
+detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int threads, const char* what) {
+  detail::Aabb<double> b;
+  if (finiteBounds(v, &b, vertexThreads<S>(v.size(), threads))) return b;
+  TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
+  probe.vertices = v;
+  probe.validate(false, what);
+  throw InvalidInputError(std::string(what) + ": a non-finite coordinate");
+}
+
 }  // namespace
 
 template <class S>
@@ -268,14 +281,8 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
   // touched; then they are copied into the mesh's own buffer, which keeps its address (no
   // allocation, no page faults; benchmarks/update_bench, RESULTS.md).
   // Large arrays are checked and copied by several threads (vertexThreads).
+  const detail::Aabb<double> b = checkedBounds(vertices, threads_, "updateVertices");
   const int t = vertexThreads<S>(vertices.size(), threads_);
-  detail::Aabb<double> b;
-  if (!finiteBounds(vertices, &b, t)) {
-    TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
-    probe.vertices = vertices;
-    probe.validate(false, "updateVertices");
-    throw InvalidInputError("updateVertices: a non-finite coordinate");
-  }
   // (One thread: a single chunk, copied in place by the caller's thread.)
   cpu::parallelFor(vertices.size(), shareOf(vertices.size(), t), t,
                    [&](std::size_t lo, std::size_t hi) {
@@ -300,14 +307,7 @@ void HashedMesh<S>::commitVertices() {
         "there first)");
   // The check and the bounds of updateVertices, on the written buffer in place; then the two
   // buffers, and each one's pin record, trade places (no copy, no allocation).
-  const int t = vertexThreads<S>(write_buffer_.size(), threads_);
-  detail::Aabb<double> b;
-  if (!finiteBounds(write_buffer_, &b, t)) {
-    TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
-    probe.vertices = write_buffer_;
-    probe.validate(false, "commitVertices");
-    throw InvalidInputError("commitVertices: a non-finite coordinate");
-  }
+  const detail::Aabb<double> b = checkedBounds(write_buffer_, threads_, "commitVertices");
   mesh_.vertices.swap(write_buffer_);
   std::swap(host_pin_, write_pin_);
   geometryChanged(b);
