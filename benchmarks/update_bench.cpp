@@ -17,7 +17,10 @@
 // buffer as before; each commitVertices: the mesh must hold the written positions in the buffer
 // they were written into. A failure exits 1. Results: benchmarks/RESULTS.md.
 //
-// Usage: update_bench [--reps R] [--max-n N]   (N: the largest cloth grid side, default 700)
+// Usage: update_bench [--reps R] [--max-n N] [--threads T] [--double]
+//   N: the largest cloth grid side (default 700); T: the meshes' threads (HashedMesh's argument,
+//   0 = the hardware's, the default); --double: double positions (kdet_bench's scenes) instead
+//   of float.
 
 #include <algorithm>
 #include <chrono>
@@ -48,34 +51,19 @@ double timeUs(F&& f) {
   return std::chrono::duration<double, std::micro>(Clock::now() - a).count();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  int reps = 30, max_n = 700;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if ((a == "--reps" || a == "--max-n") && i + 1 < argc) {
-      std::uint64_t v = 0;
-      if (!kdet_fcl::detail::parseWholeNumber(argv[++i], &v) || v < 1 || v > 1000000) {
-        std::fprintf(stderr, "update_bench: %s needs a whole number from 1 to 1000000, got '%s'\n",
-                     a.c_str(), argv[i]);
-        return 2;
-      }
-      (a == "--reps" ? reps : max_n) = int(v);
-    } else {
-      std::fprintf(stderr, "usage: update_bench [--reps R] [--max-n N]\n");
-      return 2;
-    }
-  }
-  using S = float;
+template <class S>
+int run(int reps, int max_n, int threads) {
   using kdet_fcl::Vec3;
+  std::printf("%s positions, the meshes' threads %d (0: the hardware's)\n\n",
+              sizeof(S) == sizeof(float) ? "float" : "double", threads);
   std::printf("| triangles | vertex bytes | updateVertices (us) | copy only (us) | "
               "commitVertices (us) | copy, check, move (us) |\n|---:|---:|---:|---:|---:|---:|\n");
   for (int n : {215, 354, 700}) {
     n = std::min(n, max_n);
     const kdet_fcl::TriangleMesh<S> f0 = kdet_fcl::makeDrapedCloth<S>(n, 4, 1, S(0.03), S(0.5));
     const std::vector<Vec3<S>> f1 = kdet_fcl::makeDrapedCloth<S>(n, 4, 1, S(0.03), S(0.7)).vertices;
-    kdet_fcl::HashedMesh<S> mesh(f0), committed(f0);
+    kdet_fcl::HashedMesh<S> mesh(f0, kdet_fcl::Transform<S>::identity(), threads),
+        committed(f0, kdet_fcl::Transform<S>::identity(), threads);
     const Vec3<S>* buffer = mesh.mesh().vertices.data();
     std::vector<Vec3<S>> dst = f0.vertices, held = f0.vertices;
     std::vector<double> upd, copy, commit, old;
@@ -122,4 +110,30 @@ int main(int argc, char** argv) {
     if (n == max_n) break;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int reps = 30, max_n = 700, threads = 0;
+  bool dbl = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if ((a == "--reps" || a == "--max-n" || a == "--threads") && i + 1 < argc) {
+      std::uint64_t v = 0;
+      const std::uint64_t least = a == "--threads" ? 0 : 1;
+      if (!kdet_fcl::detail::parseWholeNumber(argv[++i], &v) || v < least || v > 1000000) {
+        std::fprintf(stderr, "update_bench: %s needs a whole number from %d to 1000000, got '%s'\n",
+                     a.c_str(), int(least), argv[i]);
+        return 2;
+      }
+      (a == "--reps" ? reps : a == "--max-n" ? max_n : threads) = int(v);
+    } else if (a == "--double") {
+      dbl = true;
+    } else {
+      std::fprintf(stderr, "usage: update_bench [--reps R] [--max-n N] [--threads T] [--double]\n");
+      return 2;
+    }
+  }
+  return dbl ? run<double>(reps, max_n, threads) : run<float>(reps, max_n, threads);
 }

@@ -42,7 +42,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -52,6 +51,7 @@
 #include <thread>
 #include <vector>
 
+#include "cpu/worker_pool.h"
 #include "kdet_fcl/detail/knobs.h"
 
 namespace kdet_fcl {
@@ -191,8 +191,9 @@ inline cudaError_t pinnedUpload(void* dst, const void* src, std::size_t bytes, v
 /// not be written again until those transfers have run (the caller synchronises `s` first).
 /// Returns the first CUDA error, or cudaSuccess. Chunk c goes to stage + c*chunk and
 /// dst + c*chunk, whichever thread copies it, so the result does not depend on the scheduling.
-/// A thread that cannot be started leaves its share to the others (the calling thread alone
-/// finishes every chunk if need be).
+/// The threads are the calling one and kept workers of the library's pool
+/// (cpu::WorkerPool::shared()); one that is busy or cannot be started leaves its share to the
+/// others (the calling thread alone finishes every chunk if need be).
 inline cudaError_t stagedUpload(void* dst, const void* src, std::size_t bytes, void* stage,
                                 cudaStream_t s) {
   if (bytes == 0) return cudaSuccess;
@@ -206,7 +207,7 @@ inline cudaError_t stagedUpload(void* dst, const void* src, std::size_t bytes, v
   std::atomic<bool> failed{false};
   std::mutex error_mutex;
   cudaError_t error = cudaSuccess;
-  auto work = [&] {
+  const std::function<void()> work = [&] {
     while (!failed.load(std::memory_order_relaxed)) {
       const std::size_t c = next.fetch_add(1);
       if (c >= chunks) return;
@@ -220,17 +221,7 @@ inline cudaError_t stagedUpload(void* dst, const void* src, std::size_t bytes, v
       }
     }
   };
-  std::vector<std::thread> pool;
-  if (threads > 1) {
-    try {
-      pool.reserve(std::size_t(threads - 1));
-      for (int i = 1; i < threads; ++i) pool.emplace_back(work);
-    } catch (...) {
-      // No more threads (std::system_error or bad_alloc): the ones running and this one finish.
-    }
-  }
-  work();
-  for (auto& t : pool) t.join();
+  cpu::WorkerPool::shared().run(threads, work);
   return error;
 }
 
@@ -324,78 +315,9 @@ inline int downloadThreads(std::size_t chunks) {
 constexpr std::size_t kPooledDownloadMinChunks = 4;
 
 /// Worker threads kept from one call to the next (starting threads per call cost more than they
-/// saved: "Read-back" in benchmarks/RESULTS-gpu.md). run() is not reentrant: one caller at a
-/// time (the CUDA backend's calls hold its mutex).
-class CopyPool {
- public:
-  CopyPool() = default;
-  CopyPool(const CopyPool&) = delete;
-  CopyPool& operator=(const CopyPool&) = delete;
-  ~CopyPool() {
-    {
-      std::lock_guard<std::mutex> lock(m_);
-      stop_ = true;
-    }
-    wake_.notify_all();
-    for (auto& t : workers_) t.join();
-  }
-
-  /// Runs `work` on `threads` threads, the calling one included, and returns when every one has
-  /// returned. Workers are started as needed and kept; where one cannot be started, fewer run
-  /// (at least the calling thread). `work` must not throw.
-  void run(int threads, const std::function<void()>& work) {
-    while (static_cast<int>(workers_.size()) + 1 < threads) {
-      try {
-        workers_.emplace_back([this] { loop(); });
-      } catch (...) {
-        break;  // no more threads: the ones there do the work
-      }
-    }
-    const int helpers = std::min(threads - 1, static_cast<int>(workers_.size()));
-    if (helpers > 0) {
-      std::lock_guard<std::mutex> lock(m_);
-      job_ = &work;
-      wanted_ = helpers;
-      running_ = helpers;
-      ++generation_;
-    }
-    if (helpers > 0) wake_.notify_all();
-    work();
-    if (helpers > 0) {
-      std::unique_lock<std::mutex> lock(m_);
-      done_.wait(lock, [&] { return running_ == 0; });
-      job_ = nullptr;
-    }
-  }
-
-  /// Worker threads started so far.
-  int workers() const { return static_cast<int>(workers_.size()); }
-
- private:
-  void loop() {
-    unsigned long long seen = 0;
-    std::unique_lock<std::mutex> lock(m_);
-    while (true) {
-      wake_.wait(lock, [&] { return stop_ || (generation_ != seen && wanted_ > 0); });
-      if (stop_) return;
-      seen = generation_;
-      --wanted_;  // this worker takes part in this job
-      const std::function<void()>* job = job_;
-      lock.unlock();
-      (*job)();
-      lock.lock();
-      if (--running_ == 0) done_.notify_all();
-    }
-  }
-
-  std::vector<std::thread> workers_;
-  std::mutex m_;
-  std::condition_variable wake_, done_;
-  const std::function<void()>* job_ = nullptr;
-  unsigned long long generation_ = 0;
-  int wanted_ = 0, running_ = 0;
-  bool stop_ = false;
-};
+/// saved: "Read-back" in benchmarks/RESULTS-gpu.md): the library's pool (cpu/worker_pool.h). The
+/// CUDA backend keeps one per context for its read-backs, whose workers wait on CUDA events.
+using CopyPool = cpu::WorkerPool;
 
 /// stagedDownload into destinations the caller has storage for (a result kept across frames):
 /// every chunk's transfer is enqueued at once (or was already, `ahead`: chunksOf); `ready()` runs

@@ -131,36 +131,13 @@ void takeRange(const Vec3<S>* v, std::size_t n, Extent<S> e[3]) {
   }
 }
 
-/// Vertex arrays of at least this many bytes are checked and copied by several threads
-/// (updateVertices): one per kVertexBytesPerThread, at most the mesh's threads, and only where
-/// that makes at least kMinVertexThreads. One thread streams about 10 GB/s on the hosts
-/// measured, so a 1M-triangle cloth's 13.5 MB of double positions took 3.6-3.9 ms to check and
-/// copy on one thread of a 16-core Xeon and 1.2-1.3 ms on 6 (H100 host, benchmarks/RESULTS-gpu.md);
-/// below 4 MB a thread's start costs more than it saves. Two threads did not pay: the 1M float
-/// cloth's 5.9 MB took 776-818 us on two threads of a 2-thread Xeon against 684-730 on one
-/// (update_bench, benchmarks/RESULTS.md).
-constexpr std::size_t kParallelVertexBytes = std::size_t(4) << 20;
-constexpr std::size_t kVertexBytesPerThread = std::size_t(2) << 20;
-constexpr int kMinVertexThreads = 3;
-
-/// The threads for a pass over `count` vertices of S: 1 below kParallelVertexBytes, else one per
-/// kVertexBytesPerThread, at most `threads` (0: the hardware's); 1 where that is fewer than
-/// kMinVertexThreads. The hardware's count is read once: std::thread::hardware_concurrency reads
-/// a file under /sys on glibc, tens of microseconds that a 5.9 MB update measured.
+/// The threads of a pass over `count` vertices of S (cpu::vertexPassThreads).
 template <class S>
 int vertexThreads(std::size_t count, int threads) {
-  const std::size_t bytes = count * sizeof(Vec3<S>);
-  if (bytes < kParallelVertexBytes) return 1;
-  static const int hardware = std::max(1, int(std::thread::hardware_concurrency()));
-  const int t =
-      cpu::resolveThreads(threads > 0 ? threads : hardware, bytes / kVertexBytesPerThread);
-  return t >= kMinVertexThreads ? t : 1;
+  return cpu::vertexPassThreads(count * sizeof(Vec3<S>), threads);
 }
 
-/// Each of t threads' share of n items (at least 1, so that an empty array is one empty chunk).
-inline std::size_t shareOf(std::size_t n, int t) {
-  return std::max<std::size_t>(1, (n + std::size_t(t) - 1) / std::size_t(t));
-}
+using cpu::shareOf;
 
 /// The bounds of `v` in double (empty for no vertex), by takeRange in t threads (vertexThreads);
 /// false when a coordinate is not finite (its sum of x - x is then not 0).

@@ -342,24 +342,8 @@ TEST(StagedDownload, TheChunkKnobIsParsedAndBoundedApartFromTheUploads) {
   EXPECT_EQ(uploadChunk(), 8192u);
 }
 
-TEST(CopyPool, RunsTheWorkOnTheThreadsAskedForAndKeepsThem) {
-  kdet_fcl::staging::CopyPool pool;
-  int most = 1;
-  for (int threads : {1, 3, 4, 2, 4}) {
-    most = std::max(most, threads);
-    std::atomic<int> ran{0};
-    std::vector<std::thread::id> ids(8);
-    const std::function<void()> work = [&] {
-      ids[std::size_t(ran.fetch_add(1))] = std::this_thread::get_id();
-    };
-    pool.run(threads, work);
-    EXPECT_EQ(ran.load(), threads);
-    std::sort(ids.begin(), ids.begin() + threads);
-    EXPECT_EQ(std::unique(ids.begin(), ids.begin() + threads) - ids.begin(), threads)
-        << "each share on its own thread";
-    EXPECT_EQ(pool.workers(), most - 1) << "workers are kept, never more than asked for";
-  }
-}
+// (CopyPool is the library's worker pool, cpu::WorkerPool: test_worker_pool.cpp tests that the
+// threads asked for join a job, each once, and that its workers are kept.)
 
 TEST(PooledDownload, EveryElementArrivesIntoAKeptVectorWhateverItHeld) {
   if (!kdet_test::haveCudaDevice()) GTEST_SKIP() << "no CUDA device";

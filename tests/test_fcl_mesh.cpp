@@ -1,8 +1,13 @@
 // kdet_fcl::Mesh<S> (issue 3): a BVHModel<OBBRSS> that FCL's own collide, objects and managers
 // accept with FCL's results, whose kDet hash follows every build, update and replace, and whose
-// KdetOnly mode skips FCL's refits.
+// KdetOnly mode skips FCL's refits; a large model's passes over its positions (the local AABB,
+// a deformation's conversion) in several threads give what one thread gives.
 
 #include <gtest/gtest.h>
+
+#include <cstring>
+#include <limits>
+#include <string>
 
 #include "fcl/mesh_cache.h"
 #include "fcl_test_util.h"
@@ -349,4 +354,144 @@ TEST(FclMesh, APlainModelsTrianglesWrittenInPlaceAreHashedAnew) {
   EXPECT_NE(rewired, deformed);
   kdet_fcl::forget<double>(cloth.get());
   kdet_fcl::forget<double>(ball.get());
+}
+
+namespace {
+
+/// FCL's local AABB of a model, bit for bit (NaN included).
+struct LocalAabb {
+  double lo[3], hi[3], center[3], radius;
+  template <class Model>
+  explicit LocalAabb(const Model& m) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = m.aabb_local.min_[a];
+      hi[a] = m.aabb_local.max_[a];
+      center[a] = m.aabb_center[a];
+    }
+    radius = m.aabb_radius;
+  }
+  bool operator==(const LocalAabb& o) const { return std::memcmp(this, &o, sizeof(*this)) == 0; }
+};
+
+/// Runs body() with collideOptions().threads = threads; the options are restored on every way
+/// out.
+template <class F>
+void withCollideThreads(int threads, F&& body) {
+  struct Restore {
+    kdet_fcl::QueryOptions saved = kdet_fcl::collideOptions();
+    ~Restore() { kdet_fcl::setCollideOptions(saved); }
+  } restore;
+  kdet_fcl::QueryOptions o = restore.saved;
+  o.threads = threads;
+  kdet_fcl::setCollideOptions(o);
+  body();
+}
+
+/// FCL's own local AABB of positions `ps` (BVHModel::computeLocalAABB on a model filled, not built).
+LocalAabb fclLocalAabb(const std::vector<fcl::Vector3d>& ps) {
+  fcl::BVHModel<fcl::OBBRSSd> m;
+  m.beginModel(0, int(ps.size()));
+  for (const auto& p : ps) m.addVertex(p);
+  m.computeLocalAABB();
+  return LocalAabb(m);
+}
+
+/// A kdet_fcl::Mesh in KdetOnly mode built from `m` (nullptr where endModel fails).
+std::shared_ptr<kdet_fcl::Meshd> kdetOnlyModel(const TriangleMesh<double>& m) {
+  auto km = std::make_shared<kdet_fcl::Meshd>(kdet_fcl::MeshMode::KdetOnly);
+  std::vector<fcl::Triangle> ts;
+  for (const auto& t : m.triangles) ts.emplace_back(t[0], t[1], t[2]);
+  km->beginModel();
+  km->addSubModel(shifted(m, 0), ts);
+  return km->endModel() == fcl::BVH_OK ? km : nullptr;
+}
+
+std::vector<fcl::Vector3d> positionsOf(const fcl::BVHModel<fcl::OBBRSSd>& m) {
+  return std::vector<fcl::Vector3d>(m.vertices, m.vertices + m.num_vertices);
+}
+
+}  // namespace
+
+// A model of 1.5 MB of positions and more takes its local AABB in several threads (512 KB a
+// thread, where that makes at least 3): the values of FCL's own serial passes exactly, after a
+// build and after each update, whatever the threads; with a NaN, FCL's passes themselves.
+TEST(FclMesh, ALargeModelsLocalAabbInThreadsIsFcls) {
+  TriangleMesh<double> cloth = kdet_fcl::makeDrapedCloth<double>(260, 3.0, 1.0, 0.05, 1.0);
+  const std::size_t nv = cloth.vertices.size();
+  ASSERT_GE(nv * sizeof(fcl::Vector3d), std::size_t(1536) << 10);
+  // Extremes in the middle shares too (the cloth's own lie at its border, the first and last).
+  cloth.vertices[nv / 3] = {-7.5, 0.25, 9.0};
+  cloth.vertices[nv / 2 + 11] = {6.0, -8.0, -0.5};
+  auto km = kdetOnlyModel(cloth);  // endModel: computeLocalAABB, in the default threads
+  ASSERT_TRUE(km != nullptr);
+  EXPECT_TRUE(LocalAabb(*km) == fclLocalAabb(positionsOf(*km)));
+  EXPECT_EQ(km->aabb_local.min_[0], -7.5);
+  EXPECT_EQ(km->aabb_local.min_[1], -8.0);
+  for (int threads : {1, 3, 4, 8, 0}) {
+    withCollideThreads(threads, [&] {
+      for (double dz : {-0.4, 0.7}) {
+        std::vector<fcl::Vector3d> ps = shifted(cloth, dz);
+        ps[nv - 5] = fcl::Vector3d(11.0 + dz, 3.0, dz);  // the far point in the last share
+        km->beginUpdateModel();
+        km->updateSubModel(ps);
+        ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+        EXPECT_TRUE(LocalAabb(*km) == fclLocalAabb(ps)) << threads << " threads, dz " << dz;
+        EXPECT_EQ(km->aabb_local.max_[0], 11.0 + dz);
+      }
+      // A NaN in a middle share: FCL's own passes (whose NaN handling depends on the order).
+      std::vector<fcl::Vector3d> ps = shifted(cloth, 0.1);
+      ps[nv / 2][1] = std::nan("");
+      km->beginUpdateModel();
+      km->updateSubModel(ps);
+      ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+      EXPECT_TRUE(LocalAabb(*km) == fclLocalAabb(ps)) << threads << " threads, NaN";
+    });
+  }
+}
+
+// A deformation of a large model (positions of 1.5 MB and more) is converted into the hash's
+// write buffer by several threads: every position of every share arrives, the triangles keep
+// their topology version, and a NaN in any share is refused by the next query, naming it.
+TEST(FclMesh, ALargeDeformationIsTakenInByThreadsWithEveryPosition) {
+  const TriangleMesh<double> cloth = kdet_fcl::makeDrapedCloth<double>(260, 3.0, 1.0, 0.05, 1.0);
+  const std::size_t nv = cloth.vertices.size();
+  ASSERT_GE(nv * sizeof(fcl::Vector3d), std::size_t(1536) << 10);
+  auto ball = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(kdet_fcl::makeSphere<double>({0, 0, 0}, 1.0, 16, 8));
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  auto km = kdetOnlyModel(cloth);
+  ASSERT_TRUE(km != nullptr);
+  const auto& entry = kdet_fcl::detail::MeshAccess<double>::entry(*km);
+  ASSERT_TRUE(entry->hashed != nullptr);
+  const std::uint64_t topology = entry->hashed->topologyVersion();
+  for (int threads : {3, 4, 0}) {
+    withCollideThreads(threads, [&] {
+      for (double dz : {-0.2, 0.3}) {
+        std::vector<fcl::Vector3d> ps = shifted(cloth, dz);
+        for (std::size_t i = 0; i < nv; i += 997) ps[i][0] += 1e-3 * double(i % 7);
+        km->beginUpdateModel();
+        km->updateSubModel(ps);
+        ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+        const auto& v = entry->hashed->mesh().vertices;
+        ASSERT_EQ(v.size(), nv);
+        std::size_t wrong = 0;
+        for (std::size_t i = 0; i < nv; ++i)
+          wrong += !(v[i].x == ps[i][0] && v[i].y == ps[i][1] && v[i].z == ps[i][2]);
+        EXPECT_EQ(wrong, 0u) << threads << " threads, dz " << dz;
+        EXPECT_EQ(entry->hashed->topologyVersion(), topology) << "taken in as a deformation";
+      }
+      std::vector<fcl::Vector3d> bad = shifted(cloth, 0.1);
+      const std::size_t at = nv - 3 - std::size_t(threads);  // in the last share
+      bad[at][2] = std::numeric_limits<double>::infinity();
+      km->beginUpdateModel();
+      km->updateSubModel(bad);
+      ASSERT_EQ(km->endUpdateModel(), fcl::BVH_OK);
+      try {
+        (void)kdetPairs<double>(km.get(), I, ball.get(), I);
+        ADD_FAILURE() << "a non-finite vertex was accepted, " << threads << " threads";
+      } catch (const kdet_fcl::InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex " + std::to_string(at)), std::string::npos)
+            << e.what();
+      }
+    });
+  }
 }

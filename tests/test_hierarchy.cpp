@@ -329,8 +329,9 @@ TEST(HashedMesh, UpdateVerticesKeepsTheBufferAndBoundsInOnePass) {
   checkUpdateVerticesInPlace<double>();
 }
 
-// From 4 MB of positions on, updateVertices checks and copies them in several threads (one per
-// 2 MB, at most the mesh's, where that makes at least 3: here 3 and 4 of the counts below): the
+// From 1.5 MB of positions on, updateVertices checks and copies them in several threads (one per
+// 512 KB, at most the mesh's, where that makes at least 3: here 3, 4 and the hardware's count of
+// the counts below; the threads are the library's kept workers, cpu/worker_pool.h): the
 // same bounds, the same positions, the same refusal of a non-finite coordinate in any thread's
 // share (first and last vertex of each share and their neighbours) with the vertex named and the
 // mesh left as it was, for every thread count. commitVertices checks its write buffer in place
@@ -338,7 +339,7 @@ TEST(HashedMesh, UpdateVerticesKeepsTheBufferAndBoundsInOnePass) {
 // as written, the mesh unchanged), and a mended buffer commits.
 template <class S>
 void checkUpdateVerticesInThreads() {
-  const std::size_t nv = (std::size_t(9) << 20) / sizeof(Vec3<S>);  // 9 MB: up to 4 threads
+  const std::size_t nv = (std::size_t(9) << 20) / sizeof(Vec3<S>);  // 9 MB: up to 18 threads
   TriangleMesh<S> m;
   for (std::size_t i = 0; i < nv; ++i)
     m.vertices.push_back({S(i % 1000), S((i / 1000) % 1000), S(i % 7) - S(3)});

@@ -112,6 +112,13 @@ class Mesh : public fcl::BVHModel<fcl::OBBRSS<S>> {
   /// computeLocalAABB(); kDet's hash is marked stale and rebuilt by the next query that needs it.
   int endUpdateModel(bool refit = true, bool bottomup = true);
 
+  /// FCL's computeLocalAABB (aabb_local, aabb_center, aabb_radius), with a large model's two
+  /// passes over its vertices split over the vertex passes' threads (collideOptions().threads;
+  /// arrays of 1.5 MB and more, 512 KB a thread): the same values as FCL's, since the box and
+  /// the radius are minima and maxima. A model with a non-finite coordinate takes FCL's own
+  /// passes, as does a small one.
+  void computeLocalAABB() override;
+
   MeshMode mode() const { return mode_; }
   /// Switching to MeshMode::Fcl refits FCL's BVH if it is stale.
   void setMode(MeshMode mode);

@@ -22,6 +22,7 @@
 #include <fcl/narrowphase/distance.h>
 
 #include "cpu/hierarchical_hash.h"
+#include "cpu/parallel.h"
 #include "fcl/mesh_cache.h"
 #include "fcl/triangle_contact.h"
 #include "kdet_fcl/detail/pose.h"
@@ -183,9 +184,14 @@ void syncEntry(FclMeshEntry<S>& e, const FclMeshView<S>& v) {
       // The new positions straight into the hash's write buffer, checked there; the triangles
       // (validated when they were hashed) are neither copied nor checked again, and keep the
       // mesh's topology version, so the CUDA backend keeps its copy of them.
+      // (A large model's in the vertex passes' threads: cpu::vertexPassThreads.)
       Vec3<S>* w = e.hashed->vertexWriteBuffer();
-      for (int i = 0; i < v.num_vertices; ++i)
-        w[i] = {v.vertices[i][0], v.vertices[i][1], v.vertices[i][2]};
+      const auto n = static_cast<std::size_t>(v.num_vertices);
+      const int t = cpu::vertexPassThreads(n * sizeof(Vec3<S>), collideOptions().threads);
+      cpu::parallelFor(n, cpu::shareOf(n, t), t, [&](std::size_t lo, std::size_t hi) {
+        for (std::size_t i = lo; i < hi; ++i)
+          w[i] = {v.vertices[i][0], v.vertices[i][1], v.vertices[i][2]};
+      });
       try {
         e.hashed->commitVertices();
       } catch (const InvalidInputError&) {

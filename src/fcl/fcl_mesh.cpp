@@ -2,13 +2,18 @@
 
 #include "kdet_fcl/fcl_mesh.h"
 
+#include <atomic>
+#include <cmath>
 #include <iostream>
 #include <mutex>
+#include <vector>
 
 #include "kdet_fcl/fcl_mesh.h"  // BVH_model.h with the includes it needs
 
+#include "cpu/parallel.h"
 #include "fcl/mesh_cache.h"
 #include "kdet_fcl/errors.h"
+#include "kdet_fcl/fcl_collide.h"  // collideOptions()
 
 namespace kdet_fcl {
 
@@ -48,6 +53,56 @@ int Mesh<S>::endChange(int code) {
     }
   }
   return code;
+}
+
+template <class S>
+void Mesh<S>::computeLocalAABB() {
+  const auto n = static_cast<std::size_t>(this->num_vertices > 0 ? this->num_vertices : 0);
+  const int t = cpu::vertexPassThreads(n * sizeof(fcl::Vector3<S>), collideOptions().threads);
+  if (t <= 1 || this->vertices == nullptr) {
+    Base::computeLocalAABB();
+    return;
+  }
+  // FCL's two passes, each share in its own thread: the share's box (merged after: minima and
+  // maxima, the same box whatever the split), then its largest squared distance from the box's
+  // centre (a maximum: the same). Where a coordinate is not finite, FCL's own serial passes,
+  // whose outcome may then depend on the order.
+  const fcl::Vector3<S>* p = this->vertices;
+  const std::size_t per = cpu::shareOf(n, t);
+  std::vector<fcl::AABB<S>> box(static_cast<std::size_t>(t));
+  std::vector<S> far(static_cast<std::size_t>(t), S(0));
+  std::atomic<bool> finite{true};
+  cpu::parallelFor(n, per, t, [&](std::size_t lo, std::size_t hi) {
+    fcl::AABB<S> b;
+    bool ok = true;
+    for (std::size_t i = lo; i < hi; ++i) {
+      ok = ok && p[i].allFinite();
+      b += p[i];
+    }
+    box[lo / per] = b;
+    if (!ok) finite.store(false, std::memory_order_relaxed);
+  });
+  if (!finite.load()) {
+    Base::computeLocalAABB();
+    return;
+  }
+  fcl::AABB<S> all;
+  for (const fcl::AABB<S>& b : box) all += b;
+  const fcl::Vector3<S> center = all.center();
+  cpu::parallelFor(n, per, t, [&](std::size_t lo, std::size_t hi) {
+    S r2 = 0;
+    for (std::size_t i = lo; i < hi; ++i) {
+      const S r = (center - p[i]).squaredNorm();
+      if (r > r2) r2 = r;
+    }
+    far[lo / per] = r2;
+  });
+  S r2 = 0;
+  for (const S r : far)
+    if (r > r2) r2 = r;
+  this->aabb_center = center;
+  this->aabb_radius = std::sqrt(r2);
+  this->aabb_local = all;
 }
 
 template <class S>
