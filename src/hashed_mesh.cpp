@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
-#include <thread>
 #include <type_traits>
 #include <string>
 #include <utility>
