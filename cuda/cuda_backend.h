@@ -90,6 +90,8 @@
 // with the HashedMesh, detail::HostPin, and dropped by it before that buffer can go;
 // updateVertices writes into the same buffer) and copied by one DMA from there, with no staging
 // copy (QueryProfile::pinned_uploads); KDET_FCL_CUDA_PIN_VERTICES=0 keeps the staged copy.
+// HashedMesh's passes in threads over such a buffer leave its lines out of the cores' private
+// caches, which halved that DMA's rate (src/cpu/dma_passes.h, KDET_FCL_DMA_PASSES).
 // The pairs come back through pinned memory in 256 KiB chunks, each appended to the result as it
 // arrives; KDET_FCL_CUDA_DOWNLOAD_CHUNK=b sets that chunk size (read at every query). Into a
 // result the caller keeps across frames (intersectSelf/intersectMeshes/intersectAll into a

@@ -14,6 +14,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "cpu/dma_passes.h"
 #include "cpu/hierarchical_hash.h"
 #include "cpu/parallel.h"
 #include "kept_self_result.h"
@@ -130,6 +131,20 @@ void takeRange(const Vec3<S>* v, std::size_t n, Extent<S> e[3]) {
   }
 }
 
+/// takeRange with each 64-byte line of v demoted from this core's private caches once it is read
+/// (cpu::demoteLines, cpu/dma_passes.h): the array goes in blocks of 16 KB, each demoted while it
+/// is still in the first-level cache. The same extents as takeRange (minima, maxima and sums of
+/// x - x, whose verdict does not depend on the order).
+template <class S>
+void takeRangeDemoting(const Vec3<S>* v, std::size_t n, Extent<S> e[3]) {
+  constexpr std::size_t kBlock = (std::size_t(16) << 10) / sizeof(Vec3<S>);
+  for (std::size_t i = 0; i < n; i += kBlock) {
+    const std::size_t m = std::min(kBlock, n - i);
+    takeRange(v + i, m, e);
+    cpu::demoteLines(v + i, m * sizeof(Vec3<S>));
+  }
+}
+
 /// The threads of a pass over `count` vertices of S (cpu::vertexPassThreads).
 template <class S>
 int vertexThreads(std::size_t count, int threads) {
@@ -139,19 +154,21 @@ int vertexThreads(std::size_t count, int threads) {
 using cpu::shareOf;
 
 /// The bounds of `v` in double (empty for no vertex), by takeRange in t threads (vertexThreads);
-/// false when a coordinate is not finite (its sum of x - x is then not 0).
+/// false when a coordinate is not finite (its sum of x - x is then not 0). `demote`: each line of
+/// v leaves the reading core's private caches once read (takeRangeDemoting).
 template <class S>
-bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int t) {
+bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int t, bool demote) {
+  const auto take = demote ? takeRangeDemoting<S> : takeRange<S>;
   Extent<S> e[3];
   if (t <= 1) {
-    takeRange(v.data(), v.size(), e);
+    take(v.data(), v.size(), e);
   } else {
     // Each thread's share into its own extents, merged after (min, max and sums: the same bounds
     // and the same verdict whatever the split).
     const std::size_t per = shareOf(v.size(), t);
     std::vector<std::array<Extent<S>, 3>> part(static_cast<std::size_t>(t));
     cpu::parallelFor(v.size(), per, t, [&](std::size_t lo, std::size_t hi) {
-      takeRange(v.data() + lo, hi - lo, part[lo / per].data());
+      take(v.data() + lo, hi - lo, part[lo / per].data());
     });
     for (const auto& p : part)
       for (int a = 0; a < 3; ++a) {
@@ -165,13 +182,14 @@ bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int 
   return e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0);
 }
 
-/// The bounds of the new positions `v` (finiteBounds in vertexThreads' threads), or
-/// InvalidInputError naming the first non-finite coordinate, prefixed by `what` (updateVertices,
-/// commitVertices).
+/// The bounds of the new positions `v` (finiteBounds in vertexThreads' threads, demoting each line
+/// where `demote`), or InvalidInputError naming the first non-finite coordinate, prefixed by
+/// `what` (updateVertices, commitVertices).
 template <class S>
-detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int threads, const char* what) {
+detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int threads, const char* what,
+                                   bool demote) {
   detail::Aabb<double> b;
-  if (finiteBounds(v, &b, vertexThreads<S>(v.size(), threads))) return b;
+  if (finiteBounds(v, &b, vertexThreads<S>(v.size(), threads), demote)) return b;
   TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
   probe.vertices = v;
   probe.validate(false, what);
@@ -257,13 +275,20 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
   // touched; then they are copied into the mesh's own buffer, which keeps its address (no
   // allocation, no page faults; benchmarks/update_bench, RESULTS.md).
   // Large arrays are checked and copied by several threads (vertexThreads).
-  const detail::Aabb<double> b = checkedBounds(vertices, threads_, "updateVertices");
+  const detail::Aabb<double> b = checkedBounds(vertices, threads_, "updateVertices", false);
   const int t = vertexThreads<S>(vertices.size(), threads_);
+  // Into a buffer the GPU reads by DMA next (registered by the CUDA backend), a copy in several
+  // threads goes by non-temporal stores, leaving no line in their caches (cpu/dma_passes.h).
+  const bool stream = cpu::dmaPasses(t > 1 && host_pin_.pinned());
   // (One thread: a single chunk, copied in place by the caller's thread.)
   cpu::parallelFor(vertices.size(), shareOf(vertices.size(), t), t,
                    [&](std::size_t lo, std::size_t hi) {
-                     std::copy(vertices.begin() + lo, vertices.begin() + hi,
-                               mesh_.vertices.begin() + lo);
+                     if (stream)
+                       cpu::streamCopy(mesh_.vertices.data() + lo, vertices.data() + lo,
+                                       (hi - lo) * sizeof(Vec3<S>));
+                     else
+                       std::copy(vertices.begin() + lo, vertices.begin() + hi,
+                                 mesh_.vertices.begin() + lo);
                    });
   geometryChanged(b);
 }
@@ -282,8 +307,15 @@ void HashedMesh<S>::commitVertices() {
         "commitVertices: nothing to commit (call vertexWriteBuffer() and write the positions "
         "there first)");
   // The check and the bounds of updateVertices, on the written buffer in place; then the two
-  // buffers, and each one's pin record, trade places (no copy, no allocation).
-  const detail::Aabb<double> b = checkedBounds(write_buffer_, threads_, "commitVertices");
+  // buffers, and each one's pin record, trade places (no copy, no allocation). A buffer the GPU
+  // reads by DMA next (registered by the CUDA backend), of cpu::kDemoteMinBytes or more and
+  // checked in several threads, leaves their caches line by line as it is read
+  // (cpu/dma_passes.h).
+  const std::size_t bytes = write_buffer_.size() * sizeof(Vec3<S>);
+  const bool demote = vertexThreads<S>(write_buffer_.size(), threads_) > 1 &&
+                      bytes >= cpu::kDemoteMinBytes && write_pin_.pinned();
+  const detail::Aabb<double> b =
+      checkedBounds(write_buffer_, threads_, "commitVertices", cpu::dmaPasses(demote));
   mesh_.vertices.swap(write_buffer_);
   std::swap(host_pin_, write_pin_);
   geometryChanged(b);
@@ -311,7 +343,7 @@ template <class S>
 void HashedMesh<S>::geometryChanged() {
   detail::Aabb<double> b;
   const bool finite =
-      finiteBounds(mesh_.vertices, &b, vertexThreads<S>(mesh_.vertices.size(), threads_));
+      finiteBounds(mesh_.vertices, &b, vertexThreads<S>(mesh_.vertices.size(), threads_), false);
   (void)finite;  // validated by the caller
   geometryChanged(b);
 }

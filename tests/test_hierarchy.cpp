@@ -24,6 +24,7 @@
 
 #include "cpu/hierarchical_hash.h"
 #include "oom_util.h"
+#include "scoped_env.h"
 #include "test_util.h"
 
 using namespace kdet_fcl;
@@ -339,7 +340,9 @@ TEST(HashedMesh, UpdateVerticesKeepsTheBufferAndBoundsInOnePass) {
 // as written, the mesh unchanged), and a mended buffer commits.
 template <class S>
 void checkUpdateVerticesInThreads() {
-  const std::size_t nv = (std::size_t(9) << 20) / sizeof(Vec3<S>);  // 9 MB: up to 18 threads
+  // 9 MB: up to 18 threads; an odd count, so that the shares' ends fall between 16-byte
+  // boundaries (the non-temporal copy's tails).
+  const std::size_t nv = (std::size_t(9) << 20) / sizeof(Vec3<S>) + 7;
   TriangleMesh<S> m;
   for (std::size_t i = 0; i < nv; ++i)
     m.vertices.push_back({S(i % 1000), S((i / 1000) % 1000), S(i % 7) - S(3)});
@@ -417,6 +420,30 @@ void checkUpdateVerticesInThreads() {
 TEST(HashedMesh, UpdateVerticesOfLargeArraysInSeveralThreadsChecksAndBoundsTheSame) {
   checkUpdateVerticesInThreads<float>();
   checkUpdateVerticesInThreads<double>();
+}
+
+// The same passes in the form they take over a buffer the GPU reads by DMA next (src/cpu/
+// dma_passes.h; by default only where the CUDA backend registered it, here forced by the knob):
+// updateVertices copies by non-temporal stores, commitVertices demotes each line it has checked.
+// The same positions, bounds and refusals for every thread count; and a knob value the rule does
+// not accept fails the update and the commit before the mesh changes.
+TEST(HashedMesh, UpdateAndCommitLeavingTheCachesCheckAndBoundTheSame) {
+  {
+    kdet_test::ScopedEnv on("KDET_FCL_DMA_PASSES", "1");
+    checkUpdateVerticesInThreads<float>();
+    checkUpdateVerticesInThreads<double>();
+  }
+  const TriangleMesh<double> sphere = makeSphere<double>({0, 0, 0}, 1, 12, 6);
+  HashedMesh<double> hm(sphere);
+  std::vector<Vec3<double>> moved = sphere.vertices;
+  for (auto& p : moved) p.x += 0.5;
+  kdet_test::ScopedEnv bad("KDET_FCL_DMA_PASSES", "yes");
+  const auto v0 = hm.version();
+  EXPECT_THROW(hm.updateVertices(moved), InvalidInputError);
+  std::copy(moved.begin(), moved.end(), hm.vertexWriteBuffer());
+  EXPECT_THROW(hm.commitVertices(), InvalidInputError);
+  EXPECT_EQ(hm.version(), v0);
+  EXPECT_TRUE(hm.mesh().vertices == sphere.vertices);
 }
 
 // The topology version changes with the triangles only (construction, setMesh), not with

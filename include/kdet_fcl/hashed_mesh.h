@@ -66,7 +66,10 @@ class HashedMesh {
   /// New vertex positions, same count and topology. Throws InvalidInputError (and leaves the
   /// mesh unchanged) on a wrong count or a non-finite coordinate. The positions are copied into
   /// the mesh's own vertex array, which keeps its address (mesh().vertices.data()). Marks the CPU
-  /// hash stale: it is rebuilt by the next CPU query (or prepareCpuHash()), not here.
+  /// hash stale: it is rebuilt by the next CPU query (or prepareCpuHash()), not here. Once the
+  /// CUDA backend has registered that array for its DMA, a copy in several threads goes by
+  /// non-temporal stores (src/cpu/dma_passes.h; KDET_FCL_DMA_PASSES=0|1 never, always; another
+  /// value of it throws InvalidInputError, the mesh unchanged).
   void updateVertices(const std::vector<Vec3<S>>& vertices);
 
   /// For a simulation that writes each frame's positions straight into the mesh, with no copy:
@@ -84,7 +87,10 @@ class HashedMesh {
   /// each with a device runtime, detail::HostPin, moves with its buffer). Throws
   /// InvalidInputError, naming the first non-finite coordinate, and leaves the mesh unchanged
   /// (its positions, version and hash) when a written coordinate is not finite, or when
-  /// vertexWriteBuffer() was never called since construction or setMesh().
+  /// vertexWriteBuffer() was never called since construction or setMesh(). A buffer of 4 MB or
+  /// more that the CUDA backend has registered for its DMA, checked in several threads, is
+  /// demoted from their private caches line by line as it is read (src/cpu/dma_passes.h; the
+  /// same knob as updateVertices).
   void commitVertices();
 
   std::size_t numVertices() const { return mesh_.vertices.size(); }
