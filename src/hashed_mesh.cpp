@@ -182,14 +182,14 @@ bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int 
   return e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0);
 }
 
-/// The bounds of the new positions `v` (finiteBounds in vertexThreads' threads, demoting each line
-/// where `demote`), or InvalidInputError naming the first non-finite coordinate, prefixed by
-/// `what` (updateVertices, commitVertices).
+/// The bounds of the new positions `v` (finiteBounds in t threads, vertexThreads' count,
+/// demoting each line where `demote`), or InvalidInputError naming the first non-finite
+/// coordinate, prefixed by `what` (updateVertices, commitVertices).
 template <class S>
-detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int threads, const char* what,
+detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int t, const char* what,
                                    bool demote) {
   detail::Aabb<double> b;
-  if (finiteBounds(v, &b, vertexThreads<S>(v.size(), threads), demote)) return b;
+  if (finiteBounds(v, &b, t, demote)) return b;
   TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
   probe.vertices = v;
   probe.validate(false, what);
@@ -275,11 +275,11 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
   // touched; then they are copied into the mesh's own buffer, which keeps its address (no
   // allocation, no page faults; benchmarks/update_bench, RESULTS.md).
   // Large arrays are checked and copied by several threads (vertexThreads).
-  const detail::Aabb<double> b = checkedBounds(vertices, threads_, "updateVertices", false);
   const int t = vertexThreads<S>(vertices.size(), threads_);
+  const detail::Aabb<double> b = checkedBounds(vertices, t, "updateVertices", false);
   // Into a buffer the GPU reads by DMA next (registered by the CUDA backend), a copy in several
   // threads goes by non-temporal stores, leaving no line in their caches (cpu/dma_passes.h).
-  const bool stream = cpu::dmaPasses(t > 1 && host_pin_.pinned());
+  const bool stream = cpu::streamCopyInto(host_pin_.pinned(), t);
   // (One thread: a single chunk, copied in place by the caller's thread.)
   cpu::parallelFor(vertices.size(), shareOf(vertices.size(), t), t,
                    [&](std::size_t lo, std::size_t hi) {
@@ -311,11 +311,10 @@ void HashedMesh<S>::commitVertices() {
   // reads by DMA next (registered by the CUDA backend), of cpu::kDemoteMinBytes or more and
   // checked in several threads, leaves their caches line by line as it is read
   // (cpu/dma_passes.h).
-  const std::size_t bytes = write_buffer_.size() * sizeof(Vec3<S>);
-  const bool demote = vertexThreads<S>(write_buffer_.size(), threads_) > 1 &&
-                      bytes >= cpu::kDemoteMinBytes && write_pin_.pinned();
-  const detail::Aabb<double> b =
-      checkedBounds(write_buffer_, threads_, "commitVertices", cpu::dmaPasses(demote));
+  const int t = vertexThreads<S>(write_buffer_.size(), threads_);
+  const bool demote = cpu::demoteWhileChecking(write_pin_.pinned(), t,
+                                               write_buffer_.size() * sizeof(Vec3<S>));
+  const detail::Aabb<double> b = checkedBounds(write_buffer_, t, "commitVertices", demote);
   mesh_.vertices.swap(write_buffer_);
   std::swap(host_pin_, write_pin_);
   geometryChanged(b);

@@ -48,6 +48,16 @@ constexpr std::size_t kCacheLineBytes = 64;
 /// The smallest buffer whose check in commitVertices demotes its lines (see above).
 constexpr std::size_t kDemoteMinBytes = std::size_t(4) << 20;
 
+/// The rule for updateVertices' copy into a buffer that the GPU reads by DMA next (`dma`) on
+/// `threads` threads: non-temporal stores where it copies in several (subject to dmaPasses).
+inline bool streamCopyInto(bool dma, int threads) { return dmaPasses(dma && threads > 1); }
+
+/// The rule for commitVertices' check of `bytes` of such a buffer on `threads` threads: each line
+/// demoted once read where it checks kDemoteMinBytes or more in several (subject to dmaPasses).
+inline bool demoteWhileChecking(bool dma, int threads, std::size_t bytes) {
+  return dmaPasses(dma && threads > 1 && bytes >= kDemoteMinBytes);
+}
+
 /// Demotes the cache lines that hold [p, p + bytes) from this core's private caches to the shared
 /// last-level cache: CLDEMOTE, a hint that changes no data (on x86-64 processors without it, it
 /// runs as a NOP; elsewhere this does nothing). Every line it names holds a byte of the range, so
