@@ -1172,7 +1172,9 @@ __global__ void __launch_bounds__(kQueryBlock, 8)
       bool hit = false;
       if (have) {
         const Aabb<S> e = loadBoxOf(M.box + j);
-        // (by_index: the partner's vertex indices come in the same round trip as its box.)
+        // (by_index: the partner's vertex indices come in the same round trip as its box. The
+        // adjacency rule by index before the box, sparing the neighbours' boxes, measured level:
+        // benchmarks/RESULTS-gpu.md, "The cells' own span filter".)
         const TriIndices tj = by_index ? loadTri(M.t, j) : TriIndices{0, 0, 0};
         bool overlap;
         if constexpr (std::is_same<S, float>::value) overlap = boxesInFloat(row_box[row], e);
@@ -2309,6 +2311,10 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     if (total > 0xF0000000ull)
       throw InvalidInputError("mesh too large for the CUDA backend: " + std::to_string(total) +
                               " cell entries");
+    // The device writes the entry count with the fill, after this read-back; the host's copy
+    // takes it here, so that the rules that read a mesh's entry count (selfCellPairs, cellRows,
+    // cellSpans) see it from the first query on, not only after a re-hash without read-back.
+    m.info.entries = static_cast<unsigned int>(total);
     compact = m.info.fits64 != 0 && !fullKeys();
     m.entry_tri.reserve(total);  // 1/8 slack: room for the next re-hash without read-back
     m.entry_span.reserve(m.entry_tri.capacity(), false);
@@ -3641,6 +3647,32 @@ bool selfCellPairs(std::size_t entries, bool overlap) {
   return detail::switchKnob("KDET_FCL_CUDA_SELF_CELLS", overlap || entries >= large);
 }
 
+/// Whether a self query's cells are many and sparse: not crowded (the candidates per triangle of
+/// the mesh's last self query, as spansFor, at most 4) and 32-row tasks of selfCellPairsKernel at
+/// least as many as the warps an H100-class SM holds (64 per SM): from about 270k entries on an
+/// H100 or H200 (the 200k-1M cloths and the n-body scenes, not the cloth ball, the funnel or the
+/// 20k-90k cloths). Such meshes take 32 rows per task (cellRows) and the spans in the cells
+/// (cellSpans).
+bool manySparseCells(std::size_t entries, double density) {
+  const std::size_t fill = 64 * static_cast<std::size_t>(g_num_sms);
+  return density <= kCrowdedDensity && entries / 32 >= fill;
+}
+
+/// Whether selfCellPairsKernel tests the sub-cell spans of a cell's pairs before their boxes
+/// (and queues the pairs that pass, kQueueSeen): where the scan does (`spans`, spansFor: crowded
+/// meshes) and on meshes of many sparse cells (manySparseCells). In a cell the spans are 4 bytes
+/// per entry read in the cell's order, against a 24- or 48-byte box gathered per pair; on the
+/// sparse cloths they pass 33-36 % of the canonical pairs, barely more than the boxes
+/// (benchmarks/results/gpu-session41/cell_pairs_orders.cpp). Measured on an H200 (the first self
+/// query of a frame, benchmarks/RESULTS-gpu.md, "The cells' own span filter"): phase 1 of the
+/// 200k, 250k and 1M cloths 12-17 % shorter, the UNC n-body's -10 to +2 %; on the 20k-90k cloths
+/// -9 to +3 % and the two funnel frames' kdet_bench frame 0.04 ms longer, so those keep the
+/// scan's choice. KDET_FCL_CUDA_CELL_SPANS = 1 or 0 forces it (read at every query).
+bool cellSpans(bool spans, std::size_t entries, double density) {
+  return detail::switchKnob("KDET_FCL_CUDA_CELL_SPANS",
+                            spans || manySparseCells(entries, density));
+}
+
 /// Rows per task of selfCellPairsKernel: 32 where the 32-row tasks are at least as many as the
 /// warps an H100-class SM holds (64 per SM) and the cells are not crowded (the candidates per
 /// triangle of the mesh's last self query, as spansFor, at most 4), else 8. Measured on an H100
@@ -3654,8 +3686,7 @@ std::uint32_t cellRows(std::size_t entries, double density) {
   const std::uint64_t forced =
       detail::choiceKnob("KDET_FCL_CUDA_CELL_ROWS", {1, 2, 4, 8, 16, 32}, 0);
   if (forced != 0) return static_cast<std::uint32_t>(forced);
-  const std::size_t fill = 64 * static_cast<std::size_t>(g_num_sms);
-  return density <= kCrowdedDensity && entries / 32 >= fill ? 32u : 8u;
+  return manySparseCells(entries, density) ? 32u : 8u;
 }
 
 /// Register cap of the tile-8 candidate kernels, as blocks per SM in __launch_bounds__:
@@ -3922,6 +3953,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   const bool size_by_level = warp && sizeByLevel();
   const bool fixed_cells = warp && fixedCellsKnob();
   const bool by_index = indexAdjacency(M.nv, n);
+  const bool cell_spans = cell_pairs && cellSpans(spans, M.info.entries, M.self_density);
+  ctx.profile.cell_spans = cell_spans;
   ctx.profile.spans = spans;
   ctx.profile.warp_scan = warp;
   ctx.profile.size_by_level = size_by_level;
@@ -3935,7 +3968,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
     bindInfo<S>(s, M, nullptr);
     // The pairs within a level, from the cells, on stream `on`.
     auto cells = [&](cudaStream_t on) {
-      const auto kernel = spans ? selfCellPairsKernel<S, true> : selfCellPairsKernel<S, false>;
+      const auto kernel =
+          cell_spans ? selfCellPairsKernel<S, true> : selfCellPairsKernel<S, false>;
       const std::uint32_t rows = cellRows(M.info.entries, M.self_density);
       ctx.profile.cell_rows = static_cast<int>(rows);
       const unsigned int blocks = residentBlocks(
@@ -4135,6 +4169,7 @@ void readEveryKnob() {
   (void)selfCellPairs(0, false);
   (void)selfOverlap();
   (void)cellRows(0, 0);
+  (void)cellSpans(false, 0, 0);
   (void)minBlocksKnob();
   (void)filterMinBlocks();
   (void)jointOn();

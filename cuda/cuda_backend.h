@@ -54,7 +54,9 @@
 // round that runs both; KDET_FCL_CUDA_SELF_OVERLAP=0 runs the cells' kernel first, then the
 // scan, and takes the cells only for meshes of about 200k cell entries and more), and
 // KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the entries per warp task of those cells' pairs
-// (default 8 or 32 by the density; all read at every query, for tests and comparisons).
+// (default 8 or 32 by the density and the entries), and KDET_FCL_CUDA_CELL_SPANS=0|1 whether
+// they test sub-cell spans before boxes (default: where the scan does, and on meshes of many
+// sparse cells; all read at every query, for tests and comparisons).
 // KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes the builds never or always record,
 // per triangle, the levels above its own that hold a cell of its range, which self queries then
 // skip without a lookup (upperLevels(); by default recorded while the mesh's last self query
@@ -276,6 +278,9 @@ struct QueryProfile {
                                  ///< scanned only coarser levels (KDET_FCL_CUDA_SELF_CELLS)
   std::size_t cell_candidates = 0;  ///< of `candidates`, those the cells gave (self_cell_pairs)
   int cell_rows = 0;  ///< entries per warp task of the cells' pairs (KDET_FCL_CUDA_CELL_ROWS)
+  bool cell_spans = false;  ///< the cells' pairs tested sub-cell spans before boxes
+                            ///< (KDET_FCL_CUDA_CELL_SPANS; unset: where `spans`, and on
+                            ///< meshes of many sparse cells)
   bool self_overlap = false;  ///< the cells' pairs and the scan ran at the same time, on two
                               ///< streams, in some round (KDET_FCL_CUDA_SELF_OVERLAP)
   bool self_cached = false;  ///< a self query answered from the kept result of an unchanged mesh

@@ -430,6 +430,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_WARP_LANES", powers, {"0", "3", "64"}},
       {"KDET_FCL_CUDA_WARP_VISIT", {"1", "33554432"}, {"0", "33554433", "many"}},
       {"KDET_FCL_CUDA_CELL_ROWS", powers, {"0", "3", "64"}},
+      {"KDET_FCL_CUDA_CELL_SPANS", on_off, not_on_off},
       {"KDET_FCL_CUDA_MINBLOCKS", {"1", "8", "12"}, {"0", "4", "16"}},
       {"KDET_FCL_CUDA_FILTER_MINBLOCKS", {"1", "6"}, {"0", "7"}},
       {"KDET_FCL_CUDA_UPLOAD_CHUNK", {"4096", "4294967296"}, {"4095", "4294967297", "1M"}},
@@ -1387,7 +1388,9 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
   // candidates of the cells and of the scan emitted through each warp's stage in shared memory or
   // one atomic per group of lanes (KDET_FCL_CUDA_STAGE_PAIRS), and with the first pass's buffers
   // capped at 3 pairs (KDET_FCL_CUDA_PAIR_CAPACITY: the stages' candidates past the capacity are
-  // counted, not written, and the query reruns).
+  // counted, not written, and the query reruns), with the cells' own span filter forced apart
+  // from the scan's (KDET_FCL_CUDA_CELL_SPANS), and with the adjacency rule by index forced on
+  // and off (KDET_FCL_CUDA_INDEX_ADJACENCY; the soup's vertices are unshared).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -1409,15 +1412,23 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
       const char *full, *visit, *spans, *rows;
       const char* stage = nullptr;  // KDET_FCL_CUDA_STAGE_PAIRS
       const char* cap = nullptr;    // KDET_FCL_CUDA_PAIR_CAPACITY
+      const char* cell_spans = nullptr;  // KDET_FCL_CUDA_CELL_SPANS
+      const char* by_index = nullptr;    // KDET_FCL_CUDA_INDEX_ADJACENCY
     };
     for (const Config c :
          {Config{"0", "", "1", nullptr}, Config{"0", "1", "0", "1", "0"},
           Config{"1", "", "0", "8", "1", "3"}, Config{"1", "1", "1", "32", "0", "3"},
-          Config{"0", "", "0", "2", "1"}}) {
+          Config{"0", "", "0", "2", "1"},
+          Config{"0", "", "0", nullptr, nullptr, nullptr, "1", "1"},
+          Config{"1", "1", "1", "8", "0", "3", "0"},
+          Config{"0", "", "0", "32", "1", "3", "1", "0"},
+          Config{"0", "", "1", "4", "1", nullptr, nullptr, "1"}}) {
       kdet_test::ScopedEnv keys("KDET_FCL_CUDA_FULL_KEYS", c.full),
           sync("KDET_FCL_CUDA_SYNC_REHASH", c.full), cut("KDET_FCL_CUDA_WARP_VISIT", c.visit),
           spans("KDET_FCL_CUDA_SPANS", c.spans), rows("KDET_FCL_CUDA_CELL_ROWS", c.rows),
-          stage("KDET_FCL_CUDA_STAGE_PAIRS", c.stage), cap("KDET_FCL_CUDA_PAIR_CAPACITY", c.cap);
+          stage("KDET_FCL_CUDA_STAGE_PAIRS", c.stage), cap("KDET_FCL_CUDA_PAIR_CAPACITY", c.cap),
+          cell_spans("KDET_FCL_CUDA_CELL_SPANS", c.cell_spans),
+          by_index("KDET_FCL_CUDA_INDEX_ADJACENCY", c.by_index);
       cuda::markDeformed(sc.mesh);  // re-hash under these keys
       long long candidates = -1, cell_candidates = -1;
       // The cells' kernel and the scan one after the other, then at the same time on two
@@ -1432,7 +1443,9 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
                                  c.visit + "', spans " + c.spans + ", rows " +
                                  (c.rows ? c.rows : "-") + ", stage " +
                                  (c.stage ? c.stage : "-") + ", capacity " +
-                                 (c.cap ? c.cap : "-") + ", self cells " + cells;
+                                 (c.cap ? c.cap : "-") + ", cell spans " +
+                                 (c.cell_spans ? c.cell_spans : "-") + ", by index " +
+                                 (c.by_index ? c.by_index : "-") + ", self cells " + cells;
         EXPECT_EQ(intersectSelf(sc.mesh, on(Backend::Cuda)).pairs, cpu) << what;
         const cuda::QueryProfile p = cuda::lastQueryProfile();
         EXPECT_EQ(p.spans, *c.spans == '1') << what;
@@ -1444,6 +1457,10 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
           EXPECT_TRUE(p.self_cell_pairs) << what;
           if (c.rows) EXPECT_EQ(p.cell_rows, std::atoi(c.rows)) << what;
           else EXPECT_TRUE(p.cell_rows == 8 || p.cell_rows == 32) << what;
+          // Unforced: the scan's choice, or a mesh of many sparse cells (32-row tasks).
+          if (c.cell_spans) EXPECT_EQ(p.cell_spans, *c.cell_spans == '1') << what;
+          else if (!c.rows) EXPECT_EQ(p.cell_spans, p.spans || p.cell_rows == 32) << what;
+          if (c.by_index) EXPECT_EQ(p.index_adjacency, *c.by_index == '1') << what;
           EXPECT_GT(p.cell_candidates, 0u) << what;
           EXPECT_LE(p.cell_candidates, p.candidates) << what;
           if (sc.across_levels) EXPECT_LT(p.cell_candidates, p.candidates) << what;
@@ -1455,11 +1472,53 @@ TYPED_TEST(CudaQueryTyped, SelfPairsWithinALevelComeFromTheCellsWithTheSameCandi
           cell_candidates = static_cast<long long>(p.cell_candidates);
         } else {
           EXPECT_FALSE(p.self_cell_pairs) << what;
+          EXPECT_FALSE(p.cell_spans) << what;
           EXPECT_EQ(p.cell_candidates, 0u) << what;
           EXPECT_EQ(static_cast<long long>(p.candidates), candidates) << what;
         }
       }
     }
+  }
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, AMeshOfManySparseCellsTestsSpansInItsCellsAndFindsTheSamePairs) {
+  // A mesh of many sparse cells (not crowded, and 32-row tasks of the cells' pairs at least 64 a
+  // multiprocessor: 270k entries on a 132-SM H100 or H200; this 157k-triangle cloth, folded so
+  // that it crosses itself, has 417,571) runs the cells' pairs with 32 rows per task and their
+  // own sub-cell span filter, while the scan of the coarser levels keeps it off (the mesh is not
+  // crowded); KDET_FCL_CUDA_CELL_SPANS=0 and 1 force it. Every form gives the CPU's pairs and the
+  // same candidates. The default is checked on the mesh's first query, whose build reads its
+  // entry count back (the rule used to see it only after a re-hash without read-back). The
+  // scan's own span choice is left to the density (KDET_FCL_CUDA_SPANS unset, also under ctest's
+  // all-spans run).
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  HashedMesh<S> cloth(makeDrapedCloth<S>(280, 3, 1, S(0.02), 1));
+  const std::vector<TrianglePair> cpu = sorted(intersectSelf(cloth).pairs);
+  ASSERT_GT(cpu.size(), 0u) << "the draped cloth no longer crosses itself";
+  cuda::setProfiling(true);
+  long long candidates = -1;
+  kdet_test::ScopedEnv scan_spans("KDET_FCL_CUDA_SPANS", nullptr),
+      cache("KDET_FCL_CUDA_SELF_CACHE", "0");
+  for (const char* forced : {static_cast<const char*>(nullptr), "0", "1"}) {
+    kdet_test::ScopedEnv env("KDET_FCL_CUDA_CELL_SPANS", forced);
+    const std::string what = std::string("KDET_FCL_CUDA_CELL_SPANS ") + (forced ? forced : "unset");
+    EXPECT_EQ(intersectSelf(cloth, on(Backend::Cuda)).pairs, cpu) << what;
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    ASSERT_TRUE(p.self_cell_pairs) << what;
+    EXPECT_FALSE(p.spans) << what << ": the cloth's cells are crowded";
+    if (forced) {
+      EXPECT_EQ(p.cell_spans, *forced == '1') << what;
+    } else {
+      // On a device of up to 203 SMs the cloth's cells are many and sparse.
+      EXPECT_EQ(p.cell_rows, 32) << what << ": the cells are too few for this device";
+      EXPECT_TRUE(p.cell_spans) << what;
+    }
+    if (candidates >= 0) EXPECT_EQ(static_cast<long long>(p.candidates), candidates) << what;
+    candidates = static_cast<long long>(p.candidates);
   }
   cuda::setProfiling(false);
 #endif
