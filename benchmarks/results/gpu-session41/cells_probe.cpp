@@ -1,17 +1,19 @@
 // Probe (session 41): the self query's phase 1 under each form of the cells' pairs
 // (selfCellPairsKernel), in one process so every form sees the same frames and the same machine
-// state. kdet_bench's GPU form: double meshes kept across frames, per frame updateVertices of
-// the deforming objects, then the self queries. The kept-result cache is off
+// state. kdet_bench's scenes, double meshes kept across frames as its GPU form keeps them, but
+// per frame updateVertices of the deforming objects (kdet_bench commits: commitVertices), then
+// the self queries. The kept-result cache is off
 // (KDET_FCL_CUDA_SELF_CACHE=0) so every query runs on the device.
 // Default: each self query once per form after an untimed first query (which re-hashes), the
 // forms' order rotated every frame: phase 1 (candidates_ms: the cells' kernel beside the scan of
 // the coarser levels) and the query's total without a build.
 // FIRST=1: each frame's first self query (the one that re-hashes, as in kdet_bench) in one form,
-// the form rotated by frame and round; then an untimed query in the first form to compare with.
+// the form rotated by frame and round; then an untimed query in the first form to compare with;
+// then each inter query in the frame's form (timed) and in the first (to compare with).
 // Every form's pairs must equal the first form's (else "MISMATCH", exit 1).
 // Forms: base (the defaults), spans (KDET_FCL_CUDA_CELL_SPANS=1), nospans (=0), and spans-r16,
-// spans-r8, nospans-r8 (also KDET_FCL_CUDA_CELL_ROWS=16 or 8); FORMS=a,b,... picks some
-// (default base,spans). Medians over frames 1.. of rounds 1..R-1 (ROUNDS, default 4).
+// spans-r8, nospans-r8 (also KDET_FCL_CUDA_CELL_ROWS=16 or 8), allspans (KDET_FCL_CUDA_SPANS=1:
+// the scan of the coarser levels tests spans too); FORMS=a,b,... picks some (default base,spans). Medians over frames 1.. of rounds 1..R-1 (ROUNDS, default 4).
 // (Call 1 also had the forms spans+index and index, KDET_FCL_CUDA_CELL_INDEX_FIRST=1 of
 // call1-tree.diff.)
 // Build: g++ -O2 -std=c++17 -I include -I src -I . -I benchmarks cells_probe.cpp
@@ -41,6 +43,7 @@ struct Form {
   std::string name;
   const char* spans;           // KDET_FCL_CUDA_CELL_SPANS (nullptr: unset)
   const char* rows = nullptr;  // KDET_FCL_CUDA_CELL_ROWS
+  const char* scan = nullptr;  // KDET_FCL_CUDA_SPANS (the scan's spans too)
 };
 
 static void setKnob(const char* name, const char* v) {
@@ -60,7 +63,8 @@ int main(int argc, char** argv) {
   if (want.empty()) want = {"unc-cloth-ball", "cloth-90k", "cloth-250k", "cloth-1000k"};
   const std::vector<Form> all = {{"base", nullptr},       {"spans", "1"},
                                  {"nospans", "0"},       {"spans-r16", "1", "16"},
-                                 {"spans-r8", "1", "8"}, {"nospans-r8", "0", "8"}};
+                                 {"spans-r8", "1", "8"}, {"nospans-r8", "0", "8"},
+                                 {"allspans", nullptr, nullptr, "1"}};
   const bool first_only = std::getenv("FIRST") && std::string(std::getenv("FIRST")) == "1";
   std::vector<Form> forms;
   if (const char* f = std::getenv("FORMS")) {
@@ -80,7 +84,12 @@ int main(int argc, char** argv) {
   cuda::setProfiling(true);
   int mismatches = 0;
   for (const auto& s : scenes) {
-    if (std::find(want.begin(), want.end(), s.name) == want.end()) continue;
+    // (A registry key may make several scenes, "nbody" makes "nbody-181k": the keys' own ones,
+    // the scene's name starting with the key, not its "-pair" twin.)
+    const bool asked = std::any_of(want.begin(), want.end(), [&](const std::string& w) {
+      return s.name == w || (s.name.rfind(w + "-", 0) == 0 && s.name.find("-pair") == std::string::npos);
+    });
+    if (!asked) continue;
     std::vector<std::unique_ptr<HashedMesh<S>>> obj;
     std::vector<std::vector<std::vector<Vec3<S>>>> pos(s.objects.size());
     for (std::size_t o = 0; o < s.objects.size(); ++o) {
@@ -124,11 +133,13 @@ int main(int argc, char** argv) {
             const std::size_t fi = (f + round) % forms.size();
             setKnob("KDET_FCL_CUDA_CELL_SPANS", forms[fi].spans);
             setKnob("KDET_FCL_CUDA_CELL_ROWS", forms[fi].rows);
+            setKnob("KDET_FCL_CUDA_SPANS", forms[fi].scan);
             intersectSelf(*obj[i], res[fi], q);
             record(forms[fi]);
             if (fi != 0) {
               setKnob("KDET_FCL_CUDA_CELL_SPANS", forms[0].spans);
               setKnob("KDET_FCL_CUDA_CELL_ROWS", forms[0].rows);
+              setKnob("KDET_FCL_CUDA_SPANS", forms[0].scan);
               intersectSelf(*obj[i], res[0], q);
               compare(fi);
             }
@@ -137,15 +148,43 @@ int main(int argc, char** argv) {
           // A first query re-hashes (untimed here), so no form pays the build.
           setKnob("KDET_FCL_CUDA_CELL_SPANS", nullptr);
           setKnob("KDET_FCL_CUDA_CELL_ROWS", nullptr);
+          setKnob("KDET_FCL_CUDA_SPANS", nullptr);
           intersectSelf(*obj[i], res[0], q);
           for (std::size_t k = 0; k < forms.size(); ++k) {
             const std::size_t fi = (k + f + round) % forms.size();
             setKnob("KDET_FCL_CUDA_CELL_SPANS", forms[fi].spans);
             setKnob("KDET_FCL_CUDA_CELL_ROWS", forms[fi].rows);
+            setKnob("KDET_FCL_CUDA_SPANS", forms[fi].scan);
             intersectSelf(*obj[i], res[fi], q);
             record(forms[fi]);
           }
           for (std::size_t k = 1; k < forms.size(); ++k) compare(k);
+        }
+        // FIRST=1: then each inter query once, in the frame's form (no re-hash left to do), and
+        // again in the first form to compare with.
+        for (std::size_t k = 0; first_only && k < s.inter.size(); ++k) {
+          const std::size_t fi = (f + round) % forms.size();
+          const auto run = [&](const Form& fm, QueryResult& r) {
+            setKnob("KDET_FCL_CUDA_CELL_SPANS", fm.spans);
+            setKnob("KDET_FCL_CUDA_CELL_ROWS", fm.rows);
+            setKnob("KDET_FCL_CUDA_SPANS", fm.scan);
+            intersectMeshes(*obj[s.inter[k].first], *obj[s.inter[k].second], r, q);
+          };
+          run(forms[fi], res[fi]);
+          const cuda::QueryProfile p = cuda::lastQueryProfile();
+          if (keep) {
+            const std::string key = "inter" + std::to_string(k) + " " + forms[fi].name;
+            t[key + " candidates"].push_back(p.candidates_ms);
+            t[key + " total"].push_back(p.total_ms);
+          }
+          if (fi != 0) {
+            run(forms[0], res[0]);
+            if (res[fi].pairs != res[0].pairs) {
+              ++mismatches;
+              std::printf("MISMATCH %s inter %zu frame %zu: %s\n", s.name.c_str(), k, f,
+                          forms[fi].name.c_str());
+            }
+          }
         }
       }
     std::printf("== %s (triangles:", s.name.c_str());
