@@ -3482,17 +3482,24 @@ int tileSize() {
   return static_cast<int>(detail::choiceKnob("KDET_FCL_CUDA_TILE", {1, 4, 8, 16, 32}, 8));
 }
 
-/// Whether the candidate search tests sub-cell spans (scanCandidatesGroup's kSpans), given the
+/// Whether the candidate search tests sub-cell spans (kSpans of scanCandidatesWarp and
+/// scanCandidatesGroup), given the scan (`warp`: the warp-wide scan, warpScan()) and the
 /// candidates per query triangle of the last query of the same kind on the same meshes:
-/// KDET_FCL_CUDA_SPANS = 0 (never), 1 (always), unset (when that density exceeds 4; read at every
-/// query, so tests and benchmarks can compare the ways).
-/// The span test pays where cells are crowded with near-misses, as in crumpled cloth and nearly
-/// coincident surfaces (cloth ball 8.4 candidates per triangle, two frames 21: phase 1 -3 and
-/// -11 % against the kernel without it), and costs more than it saves on sparse scenes (n-body
-/// 1.1, smooth cloth 1.6-3.4: +10 to +25 %), where the density rule leaves it off
-/// (benchmarks/RESULTS-gpu.md). The choice changes the work, never the pairs.
-bool spansFor(double density) {
-  return detail::switchKnob("KDET_FCL_CUDA_SPANS", density > kCrowdedDensity);
+/// KDET_FCL_CUDA_SPANS = 0 (never), 1 (always), unset (the warp-wide scan always; the tile scan
+/// when that density exceeds 4). Read at every query, so tests and benchmarks can compare the
+/// ways; the choice changes the work, never the pairs.
+/// The warp-wide scan with spans queues the entries that pass them and tests 32 at a time
+/// (EntryRing): measured on an H200 in kdet_bench's frames (benchmarks/RESULTS-gpu.md, "The knob
+/// check's cost, and the scan's spans everywhere"), phase 1 of the sparse scenes (n-body,
+/// smooth cloth 20k-1M, funnel) 3-29 % shorter and their frames -17 to +5 % (two calls; a
+/// placebo knob moved them by up to 6.5 %), the crowded ones (cloth ball, two frames: spans
+/// already) unchanged. The tile scan tests each entry as it comes: there the test pays only in
+/// crowded cells full of near-misses (cloth ball 8.4 candidates per triangle, two frames 21:
+/// phase 1 -3 and -11 %) and cost +10 to +25 % on sparse scenes (n-body 1.1, smooth cloth
+/// 1.6-3.4), measured on an H100 before the warp-wide scan existed, where the density rule leaves
+/// it off.
+bool spansFor(double density, bool warp) {
+  return detail::switchKnob("KDET_FCL_CUDA_SPANS", warp || density > kCrowdedDensity);
 }
 
 /// Whether phase 1 runs the warp-wide scan (scanCandidatesWarp: 1-8 lanes per query triangle, the
@@ -3659,15 +3666,17 @@ bool manySparseCells(std::size_t entries, double density) {
 }
 
 /// Whether selfCellPairsKernel tests the sub-cell spans of a cell's pairs before their boxes
-/// (and queues the pairs that pass, kQueueSeen): where the scan does (`spans`, spansFor: crowded
-/// meshes) and on meshes of many sparse cells (manySparseCells). In a cell the spans are 4 bytes
+/// (and queues the pairs that pass, kQueueSeen): where the scan does (`spans`, spansFor: always
+/// under the warp-wide scan, the default) and on meshes of many sparse cells (manySparseCells,
+/// which matters under the tile scan or KDET_FCL_CUDA_SPANS=0). In a cell the spans are 4 bytes
 /// per entry read in the cell's order, against a 24- or 48-byte box gathered per pair; on the
 /// sparse cloths they pass 33-36 % of the canonical pairs, barely more than the boxes
 /// (benchmarks/results/gpu-session41/cell_pairs_orders.cpp). Measured on an H200 (the first self
 /// query of a frame, benchmarks/RESULTS-gpu.md, "The cells' own span filter"): phase 1 of the
 /// 200k, 250k and 1M cloths 12-17 % shorter, the UNC n-body's -10 to +2 %; on the 20k-90k cloths
-/// -9 to +3 % and the two funnel frames' kdet_bench frame 0.04 ms longer, so those keep the
-/// scan's choice. KDET_FCL_CUDA_CELL_SPANS = 1 or 0 forces it (read at every query).
+/// -9 to +3 % (the two funnel frames' kdet_bench frame was measured 0.04 ms longer then, but with
+/// a knob set, whose check cost every query 8-34 us until it was skipped for an unchanged
+/// setting: readEveryKnob). KDET_FCL_CUDA_CELL_SPANS = 1 or 0 forces it (read at every query).
 bool cellSpans(bool spans, std::size_t entries, double density) {
   return detail::switchKnob("KDET_FCL_CUDA_CELL_SPANS",
                             spans || manySparseCells(entries, density));
@@ -3864,8 +3873,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   const bool filter = usePlaneFilter(options);
   const bool decides = filter && filterDecides();
   ctx.profile.filter_decides = decides;
-  const bool spans = spansFor(std::max(A.inter_density, B.inter_density));
   const bool warp = warpScan();
+  const bool spans = spansFor(std::max(A.inter_density, B.inter_density), warp);
   const bool size_by_level = warp && sizeByLevel();
   const bool fixed_cells = warp && fixedCellsKnob();
   ctx.profile.spans = spans;
@@ -3944,8 +3953,8 @@ QueryResult selfQuery(Context& ctx, CachedMesh<S>& M, const MeshSource<S>& src,
   const bool filter = usePlaneFilter(options);
   const bool decides = filter && filterDecides();
   ctx.profile.filter_decides = decides;
-  const bool spans = spansFor(M.self_density);
   const bool warp = warpScan();
+  const bool spans = spansFor(M.self_density, warp);
   // (The entry count of the last build that read it back: an estimate after a re-hash.)
   const bool beside = selfOverlap();
   const bool cell_pairs = selfCellPairs(M.info.entries, beside);
@@ -4132,10 +4141,22 @@ bool jointOn() { return detail::switchKnob("KDET_FCL_CUDA_JOINT", true); }
 /// InvalidInputError (naming the variable) before a query enqueues any work, not half-way
 /// through it. Each knob is read through the function that the query itself uses. With no
 /// KDET_FCL_CUDA_* variable set (a user's usual case) it returns after one pass over the
-/// environment (0.14 us here); reading them all costs about 6 us on this project's 2-core CI
-/// machine.
+/// environment (0.14 us here). With some set, it reads them all only when their setting (every
+/// KDET_FCL_CUDA_* entry, names and values) differs from the last one it read without an error.
+/// Reading them all every time had added 8-34 us to each query's host time on an H200
+/// machine's host (benchmarks/results/gpu-session42, call 1), and so had made every knob's A/B
+/// in kdet_bench's host-timed frames look that much slower than the defaults; an unchanged
+/// setting now costs 0.75 us there (a full read 4.2 us).
 void readEveryKnob() {
   if (!detail::someKnobSet("KDET_FCL_CUDA_")) return;
+  static std::mutex checked_mutex;
+  static std::string checked;  // the setting last read in full without an error
+  std::string setting;
+  const bool listed = detail::appendKnobEntries("KDET_FCL_CUDA_", setting);
+  if (listed) {
+    std::lock_guard<std::mutex> lock(checked_mutex);
+    if (setting == checked) return;
+  }
   (void)syncRehash();
   (void)fullKeys();
   (void)rehashCap(1);
@@ -4156,7 +4177,7 @@ void readEveryKnob() {
   (void)segmentBits();
   (void)roundCandidateLimit(1, 8);
   (void)tileSize();
-  (void)spansFor(0);
+  (void)spansFor(0, false);
   (void)warpScan();
   (void)warpLanesLog2(1, 0);
   (void)warpVisit();
@@ -4178,6 +4199,10 @@ void readEveryKnob() {
   (void)staging::downloadChunk();
   (void)staging::uploadThreads(1);
   (void)staging::downloadThreads(1);
+  if (listed) {
+    std::lock_guard<std::mutex> lock(checked_mutex);
+    checked = std::move(setting);
+  }
 }
 
 /// Serialises, initialises, and on a CUDA error drops every device buffer before rethrowing.

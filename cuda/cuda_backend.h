@@ -42,7 +42,8 @@
 // sizes back (the round-3 flow, for comparisons); KDET_FCL_CUDA_FULL_KEYS=1 uses 128-bit cell
 // keys everywhere and KDET_FCL_CUDA_REHASH_CAP=k caps a re-hash at k entries and k cells (forces
 // its fallback); these three are read at every build, for tests. KDET_FCL_CUDA_SPANS=0|1 forces
-// the sub-cell span filter off or on (default: chosen per query, read at every query).
+// the sub-cell span filter off or on (default: on in the warp-wide scan, chosen per query by the
+// last query's candidate density in the tile scan; read at every query).
 // KDET_FCL_CUDA_SCAN=tile runs the older per-query tiles instead of the warp-wide candidate
 // search (read at every query; a mesh hashed while it is set lists each cell's triangles by size,
 // which only the tile scan uses, and a build for the warp scan skips that sort); KDET_FCL_CUDA_WARP_LANES=1..32 forces the
@@ -56,7 +57,9 @@
 // KDET_FCL_CUDA_CELL_ROWS=1|2|4|8|16|32 sets the entries per warp task of those cells' pairs
 // (default 8 or 32 by the density and the entries), and KDET_FCL_CUDA_CELL_SPANS=0|1 whether
 // they test sub-cell spans before boxes (default: where the scan does, and on meshes of many
-// sparse cells; all read at every query, for tests and comparisons).
+// sparse cells; all read at every query, for tests and comparisons). Every query first checks
+// every knob (checkKnobs), reading them all only when the KDET_FCL_CUDA_* setting differs from
+// the last one it found good.
 // KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes the builds never or always record,
 // per triangle, the levels above its own that hold a cell of its range, which self queries then
 // skip without a lookup (upperLevels(); by default recorded while the mesh's last self query

@@ -454,6 +454,23 @@ TEST(Knobs, EachParserAcceptsItsValuesAndRejectsEveryOtherNamingTheVariable) {
   kdet_test::ScopedEnv e(name, "1");
   EXPECT_TRUE(someKnobSet("KDET_FCL_TEST_KN"));
   EXPECT_FALSE(someKnobSet("KDET_FCL_TEST_KNOBS"));
+  // The setting that the CUDA backend's check compares: every entry of the prefix, names and
+  // values, and nothing else; a changed value changes it.
+  std::string setting = "kept:";
+  ASSERT_TRUE(appendKnobEntries("KDET_FCL_TEST_KN", setting));
+  EXPECT_EQ(setting, std::string("kept:") + name + "=1\n");
+  {
+    kdet_test::ScopedEnv other("KDET_FCL_TEST_KNOT", "");
+    kdet_test::ScopedEnv changed(name, "0");
+    std::string now;
+    ASSERT_TRUE(appendKnobEntries("KDET_FCL_TEST_KN", now));
+    EXPECT_NE(now.find(std::string(name) + "=0\n"), std::string::npos) << now;
+    EXPECT_NE(now.find("KDET_FCL_TEST_KNOT=\n"), std::string::npos) << now;
+    EXPECT_EQ(now.size(), std::string(name).size() + 3 + std::string("KDET_FCL_TEST_KNOT=\n").size());
+  }
+  std::string none;
+  ASSERT_TRUE(appendKnobEntries("KDET_FCL_TEST_KNOBS", none));
+  EXPECT_EQ(none, "");
 }
 
 // The CPU backend's one knob (KDET_FCL_CPU_SELF_CACHE) with a value it does not accept fails a

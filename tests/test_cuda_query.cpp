@@ -461,6 +461,32 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
   }
 }
 
+// The check of every knob skips its reads where the knobs' setting is the one it last found
+// good, and reads them again at any change: a value changed to one its knob refuses (same
+// length, the same entries otherwise), a knob added, refused at every check until mended; the
+// setting found good before passes again. Needs no device.
+TEST(CudaQuery, TheKnobCheckReadsAgainWheneverTheSettingChanges) {
+  kdet_test::ScopedEnv tile("KDET_FCL_CUDA_TILE", "8");
+  EXPECT_NO_THROW(cuda::checkKnobs());
+  EXPECT_NO_THROW(cuda::checkKnobs());  // the same setting: not read again
+  {
+    kdet_test::ScopedEnv bad("KDET_FCL_CUDA_TILE", "9");
+    for (int i = 0; i < 2; ++i) EXPECT_THROW(cuda::checkKnobs(), InvalidInputError) << i;
+  }
+  EXPECT_NO_THROW(cuda::checkKnobs());
+  {
+    kdet_test::ScopedEnv added("KDET_FCL_CUDA_SCAN", "Warp");
+    for (int i = 0; i < 2; ++i) EXPECT_THROW(cuda::checkKnobs(), InvalidInputError) << i;
+  }
+  {
+    kdet_test::ScopedEnv added("KDET_FCL_CUDA_SCAN", "tile");
+    EXPECT_NO_THROW(cuda::checkKnobs());
+    kdet_test::ScopedEnv bad("KDET_FCL_CUDA_TILE", "2");
+    EXPECT_THROW(cuda::checkKnobs(), InvalidInputError);
+  }
+  EXPECT_NO_THROW(cuda::checkKnobs());
+}
+
 // A query under a bad knob fails before any work, on every entry point, and leaves the device
 // caches usable: the next query, with the knob mended, gives the CPU's pairs.
 TEST(CudaQuery, AQueryUnderABadKnobFailsFirstAndTheNextOneIsRight) {
@@ -1161,10 +1187,10 @@ TEST(CudaQuery, CoplanarPairsOfTheExactKernelAreTheCpus) {
 
 TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
   // The candidate search tests sub-cell spans never (KDET_FCL_CUDA_SPANS=0), always (=1) or,
-  // unset, when the last query of the same kind on the same meshes found more than 4 candidates
-  // per query triangle: a choice of work, never of pairs. Six shifted copies of a grid in one
-  // plane crowd their cells (dense, ~20 candidates per triangle: the rule turns the spans on);
-  // a sphere is sparse (off).
+  // unset, always in the warp-wide scan and, in the tile scan, when the last query of the same
+  // kind on the same meshes found more than 4 candidates per query triangle: a choice of work,
+  // never of pairs. Six shifted copies of a grid in one plane crowd their cells (dense, ~20
+  // candidates per triangle: the tile scan's rule turns the spans on); a sphere is sparse (off).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   TriangleMesh<float> layers;
@@ -1184,7 +1210,7 @@ TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
   const auto cpu_inter = sorted(intersectMeshes(dense, sphere).pairs);
   ASSERT_GT(cpu_dense.size(), 1000u);
   ASSERT_GT(cpu_inter.size(), 100u);
-  // The ctest run test_cuda_query_all_spans sets the variable for the whole binary: restored.
+  // The ctest run test_cuda_query_no_spans sets the variable for the whole binary: restored.
   const char* outer = std::getenv("KDET_FCL_CUDA_SPANS");
   const std::optional<std::string> saved =
       outer ? std::optional<std::string>(outer) : std::nullopt;
@@ -1192,17 +1218,27 @@ TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
   // Candidates per query triangle of the last query of each kind (-1: none yet in this test;
   // the first query of each kind comes in mode "1", which does not look at it).
   double d_dense = -1, d_sphere = -1, d_inter = -1;
-  int auto_on = 0, auto_off = 0;
+  int auto_on = 0, auto_off = 0, warp_auto = 0;
+  // (The ctest run test_cuda_query_tile_scan sets the scan for the whole binary: each mode below
+  // sets it, and ScopedEnv restores it.)
+  for (const char* scan : {"tile", "warp"})
   for (const char* mode : {"1", "0", "", "", "1"}) {
+    kdet_test::ScopedEnv scan_env("KDET_FCL_CUDA_SCAN", scan);
     ASSERT_EQ(setenv("KDET_FCL_CUDA_SPANS", mode, 1), 0);
     if (!*mode) unsetenv("KDET_FCL_CUDA_SPANS");
-    const std::string what = std::string("mode '") + mode + "'";
+    const bool warp = std::string(scan) == "warp";
+    const std::string what = std::string(scan) + " scan, mode '" + mode + "'";
     // Checks the last query's choice; returns its candidate count.
     auto expectChoice = [&](double previous, const std::string& query) {
       const cuda::QueryProfile p = cuda::lastQueryProfile();
+      EXPECT_EQ(p.warp_scan, warp) << what << " " << query;
       if (*mode == '0') EXPECT_FALSE(p.spans) << what << " " << query;
       if (*mode == '1') EXPECT_TRUE(p.spans) << what << " " << query;
-      if (!*mode) {
+      if (!*mode && warp) {
+        EXPECT_TRUE(p.spans) << what << " " << query << ": density " << previous;
+        ++warp_auto;
+      }
+      if (!*mode && !warp) {
         EXPECT_EQ(p.spans, previous > 4.0) << what << " " << query << ": density " << previous;
         (p.spans ? auto_on : auto_off) += 1;
       }
@@ -1221,8 +1257,9 @@ TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
   cuda::setProfiling(false);
   EXPECT_GT(d_dense, 4.0);  // the dense scene is dense
   EXPECT_LT(d_sphere, 4.0);
-  EXPECT_GE(auto_on, 2);    // both ways of the rule ran
+  EXPECT_GE(auto_on, 2);    // both ways of the tile scan's rule ran
   EXPECT_GE(auto_off, 2);
+  EXPECT_EQ(warp_auto, 6);  // and the warp scan's, on the dense and the sparse meshes
 #endif
 }
 
@@ -1487,12 +1524,11 @@ TYPED_TEST(CudaQueryTyped, AMeshOfManySparseCellsTestsSpansInItsCellsAndFindsThe
   // A mesh of many sparse cells (not crowded, and 32-row tasks of the cells' pairs at least 64 a
   // multiprocessor: 270k entries on a 132-SM H100 or H200; this 157k-triangle cloth, folded so
   // that it crosses itself, has 417,571) runs the cells' pairs with 32 rows per task and their
-  // own sub-cell span filter, while the scan of the coarser levels keeps it off (the mesh is not
-  // crowded); KDET_FCL_CUDA_CELL_SPANS=0 and 1 force it. Every form gives the CPU's pairs and the
-  // same candidates. The default is checked on the mesh's first query, whose build reads its
-  // entry count back (the rule used to see it only after a re-hash without read-back). The
-  // scan's own span choice is left to the density (KDET_FCL_CUDA_SPANS unset, also under ctest's
-  // all-spans run).
+  // own sub-cell span filter by their own rule, shown here with the scan's spans forced off
+  // (KDET_FCL_CUDA_SPANS=0, whatever ctest's run sets), which the cells' spans otherwise follow;
+  // KDET_FCL_CUDA_CELL_SPANS=0 and 1 force them. Every form gives the CPU's pairs and the same
+  // candidates. The default is checked on the mesh's first query, whose build reads its entry
+  // count back (the rule used to see it only after a re-hash without read-back).
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -1501,7 +1537,7 @@ TYPED_TEST(CudaQueryTyped, AMeshOfManySparseCellsTestsSpansInItsCellsAndFindsThe
   ASSERT_GT(cpu.size(), 0u) << "the draped cloth no longer crosses itself";
   cuda::setProfiling(true);
   long long candidates = -1;
-  kdet_test::ScopedEnv scan_spans("KDET_FCL_CUDA_SPANS", nullptr),
+  kdet_test::ScopedEnv scan_spans("KDET_FCL_CUDA_SPANS", "0"),
       cache("KDET_FCL_CUDA_SELF_CACHE", "0");
   for (const char* forced : {static_cast<const char*>(nullptr), "0", "1"}) {
     kdet_test::ScopedEnv env("KDET_FCL_CUDA_CELL_SPANS", forced);
@@ -1509,7 +1545,7 @@ TYPED_TEST(CudaQueryTyped, AMeshOfManySparseCellsTestsSpansInItsCellsAndFindsThe
     EXPECT_EQ(intersectSelf(cloth, on(Backend::Cuda)).pairs, cpu) << what;
     const cuda::QueryProfile p = cuda::lastQueryProfile();
     ASSERT_TRUE(p.self_cell_pairs) << what;
-    EXPECT_FALSE(p.spans) << what << ": the cloth's cells are crowded";
+    EXPECT_FALSE(p.spans) << what;
     if (forced) {
       EXPECT_EQ(p.cell_spans, *forced == '1') << what;
     } else {

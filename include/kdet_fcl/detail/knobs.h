@@ -45,6 +45,23 @@ inline bool someKnobSet(const char* prefix) {
 #endif
 }
 
+/// Appends to `text` each environment entry ("NAME=value") whose name starts with `prefix`, with
+/// a '\n' after each, in the environment's order: the knobs' whole setting, which a check of
+/// every knob can compare with the setting it last found good (cuda::checkKnobs). Returns false
+/// where the environment cannot be listed (`text` unchanged).
+inline bool appendKnobEntries(const char* prefix, std::string& text) {
+#if defined(__unix__) || defined(__APPLE__)
+  const std::size_t n = std::strlen(prefix);
+  for (char** e = environ; e != nullptr && *e != nullptr; ++e)
+    if (std::strncmp(*e, prefix, n) == 0) text.append(*e).push_back('\n');
+  return true;
+#else
+  (void)prefix;
+  (void)text;
+  return false;
+#endif
+}
+
 /// Throws the error of a knob whose value `text` is not one it accepts (`accepts` says what is).
 [[noreturn]] inline void badKnob(const char* name, const char* text, const std::string& accepts) {
   throw InvalidInputError(std::string(name) + "='" + text + "': expected " + accepts +
