@@ -466,7 +466,8 @@ TEST(Knobs, EachParserAcceptsItsValuesAndRejectsEveryOtherNamingTheVariable) {
     ASSERT_TRUE(appendKnobEntries("KDET_FCL_TEST_KN", now));
     EXPECT_NE(now.find(std::string(name) + "=0\n"), std::string::npos) << now;
     EXPECT_NE(now.find("KDET_FCL_TEST_KNOT=\n"), std::string::npos) << now;
-    EXPECT_EQ(now.size(), std::string(name).size() + 3 + std::string("KDET_FCL_TEST_KNOT=\n").size());
+    EXPECT_EQ(now.size(),
+              std::string(name).size() + 3 + std::string("KDET_FCL_TEST_KNOT=\n").size());
   }
   std::string none;
   ASSERT_TRUE(appendKnobEntries("KDET_FCL_TEST_KNOBS", none));

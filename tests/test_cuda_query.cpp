@@ -1221,36 +1221,37 @@ TEST(CudaQuery, SubcellSpanChoiceFollowsTheDensityAndNeverChangesThePairs) {
   int auto_on = 0, auto_off = 0, warp_auto = 0;
   // (The ctest run test_cuda_query_tile_scan sets the scan for the whole binary: each mode below
   // sets it, and ScopedEnv restores it.)
-  for (const char* scan : {"tile", "warp"})
-  for (const char* mode : {"1", "0", "", "", "1"}) {
+  for (const char* scan : {"tile", "warp"}) {
     kdet_test::ScopedEnv scan_env("KDET_FCL_CUDA_SCAN", scan);
-    ASSERT_EQ(setenv("KDET_FCL_CUDA_SPANS", mode, 1), 0);
-    if (!*mode) unsetenv("KDET_FCL_CUDA_SPANS");
     const bool warp = std::string(scan) == "warp";
-    const std::string what = std::string(scan) + " scan, mode '" + mode + "'";
-    // Checks the last query's choice; returns its candidate count.
-    auto expectChoice = [&](double previous, const std::string& query) {
-      const cuda::QueryProfile p = cuda::lastQueryProfile();
-      EXPECT_EQ(p.warp_scan, warp) << what << " " << query;
-      if (*mode == '0') EXPECT_FALSE(p.spans) << what << " " << query;
-      if (*mode == '1') EXPECT_TRUE(p.spans) << what << " " << query;
-      if (!*mode && warp) {
-        EXPECT_TRUE(p.spans) << what << " " << query << ": density " << previous;
-        ++warp_auto;
-      }
-      if (!*mode && !warp) {
-        EXPECT_EQ(p.spans, previous > 4.0) << what << " " << query << ": density " << previous;
-        (p.spans ? auto_on : auto_off) += 1;
-      }
-      return double(p.candidates);
-    };
-    EXPECT_EQ(intersectSelf(dense, on(Backend::Cuda)).pairs, cpu_dense) << what;
-    d_dense = expectChoice(d_dense, "dense self") / double(dense.numTriangles());
-    EXPECT_EQ(intersectSelf(sphere, on(Backend::Cuda)).pairs, cpu_sphere) << what;
-    d_sphere = expectChoice(d_sphere, "sphere self") / double(sphere.numTriangles());
-    EXPECT_EQ(intersectMeshes(dense, sphere, on(Backend::Cuda)).pairs, cpu_inter) << what;
-    d_inter = expectChoice(d_inter, "inter") /
-              double(dense.numTriangles() + sphere.numTriangles());
+    for (const char* mode : {"1", "0", "", "", "1"}) {
+      ASSERT_EQ(setenv("KDET_FCL_CUDA_SPANS", mode, 1), 0);
+      if (!*mode) unsetenv("KDET_FCL_CUDA_SPANS");
+      const std::string what = std::string(scan) + " scan, mode '" + mode + "'";
+      // Checks the last query's choice; returns its candidate count.
+      auto expectChoice = [&](double previous, const std::string& query) {
+        const cuda::QueryProfile p = cuda::lastQueryProfile();
+        EXPECT_EQ(p.warp_scan, warp) << what << " " << query;
+        if (*mode == '0') EXPECT_FALSE(p.spans) << what << " " << query;
+        if (*mode == '1') EXPECT_TRUE(p.spans) << what << " " << query;
+        if (!*mode && warp) {
+          EXPECT_TRUE(p.spans) << what << " " << query << ": density " << previous;
+          ++warp_auto;
+        }
+        if (!*mode && !warp) {
+          EXPECT_EQ(p.spans, previous > 4.0) << what << " " << query << ": density " << previous;
+          (p.spans ? auto_on : auto_off) += 1;
+        }
+        return double(p.candidates);
+      };
+      EXPECT_EQ(intersectSelf(dense, on(Backend::Cuda)).pairs, cpu_dense) << what;
+      d_dense = expectChoice(d_dense, "dense self") / double(dense.numTriangles());
+      EXPECT_EQ(intersectSelf(sphere, on(Backend::Cuda)).pairs, cpu_sphere) << what;
+      d_sphere = expectChoice(d_sphere, "sphere self") / double(sphere.numTriangles());
+      EXPECT_EQ(intersectMeshes(dense, sphere, on(Backend::Cuda)).pairs, cpu_inter) << what;
+      d_inter = expectChoice(d_inter, "inter") /
+                double(dense.numTriangles() + sphere.numTriangles());
+    }
   }
   if (saved) setenv("KDET_FCL_CUDA_SPANS", saved->c_str(), 1);
   else unsetenv("KDET_FCL_CUDA_SPANS");
