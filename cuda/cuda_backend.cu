@@ -1871,6 +1871,9 @@ struct CachedMesh {
   std::size_t nv = 0, nt = 0;
   bool valid = false;  // false: the next use rebuilds
   bool force_vertices = false;
+  // The owner's version() whose positions commitVertices copied into `v` while checking them
+  // (startCommitCopy; the entry of one mesh alone), 0: none. The next rebuild skips their upload.
+  std::uint64_t commit_version = 0;
   std::vector<Triangle> host_tris;  // what the device triangles hold, unshifted (topology check)
 
   DeviceBuffer<Vec3<S>> v;
@@ -2624,7 +2627,7 @@ bool warpScan();
 ///   as a CUDA graph (rehashFromGraph), unless KDET_FCL_CUDA_REHASH_GRAPH=0.
 template <class S>
 void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upload_tris,
-             bool try_async) {
+             bool try_async, bool committed = false) {
   const cudaStream_t s = ctx.stream;
   const std::size_t nv = mesh.nv(), nt = mesh.nt();
   static_assert(kMaxDeviceTriangles <= kEntryTriMask,
@@ -2641,13 +2644,18 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upl
   if (upload_tris) m.t.reserve(3 * nt, false);
   // Each part's vertices (and triangles) go to their place in the arrays, through their own part
   // of the stage; the second part's vertex indices are then shifted past the first's vertices.
+  // (`committed`: the first part's positions are on the device already, copied there by
+  // commitVertices; startCommitCopy.)
+  m.commit_version = 0;
   std::size_t v_at = 0, t_at = 0;
   for (int k = 0; k < 2; ++k) {
     const TriangleMesh<S>* part = mesh.part[k];
     if (part == nullptr) continue;
     const std::size_t pv = part->vertices.size(), pt = part->triangles.size();
-    if (uploadVertices(ctx, m.v.data() + v_at, mesh.owner[k], *part,
-                       stage + v_at * sizeof(Vec3<S>)))
+    if (k == 0 && committed)
+      ++ctx.profile.commit_uploads;
+    else if (uploadVertices(ctx, m.v.data() + v_at, mesh.owner[k], *part,
+                            stage + v_at * sizeof(Vec3<S>)))
       ++ctx.profile.pinned_uploads;
     if (upload_tris) {
       CUDA_TRY(staging::stagedUpload(m.t.data() + 3 * t_at, part->triangles.data(),
@@ -2754,8 +2762,12 @@ CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm, const HashedMesh<S
                                         m.host_tris.begin() + t0.size());
   };
   const bool same_topology = only_vertices || sameTriangles();
+  // commitVertices copied this version's positions into the device's array while it checked
+  // them (startCommitCopy, which takes an entry of one mesh with as many vertices).
+  const bool committed = same_topology && hm2 == nullptr && m.commit_version != 0 &&
+                         m.commit_version == hm.version() && m.nv == src.nv();
   m.valid = false;
-  rebuild(ctx, m, src, !same_topology, same_topology);
+  rebuild(ctx, m, src, !same_topology, same_topology, committed);
   if (!same_topology) {
     m.host_tris = hm.mesh().triangles;
     if (hm2) m.host_tris.insert(m.host_tris.end(), hm2->mesh().triangles.begin(),
@@ -4137,6 +4149,20 @@ AllDevicePairsResult jointOnDeviceImpl(Context& ctx, const HashedMesh<S>& a,
 /// (read at every call).
 bool jointOn() { return detail::switchKnob("KDET_FCL_CUDA_JOINT", true); }
 
+/// KDET_FCL_CUDA_COMMIT_COPY=0 turns off commitVertices' copy of the positions while it checks
+/// them (startCommitCopy; default on). Read at every commit; any value but 0 or 1 fails the next
+/// query (checkKnobs).
+bool commitCopyOn() { return detail::switchKnob("KDET_FCL_CUDA_COMMIT_COPY", true); }
+
+/// The batch of commitVertices' copy (CommitCopy::batchBytes): KDET_FCL_CUDA_COMMIT_BATCH=b
+/// (4096 bytes to 1 GiB; read at every commit, checked at every query), else
+/// detail::kCommitBatchBytes.
+std::size_t commitBatch() {
+  return static_cast<std::size_t>(detail::numberKnob("KDET_FCL_CUDA_COMMIT_BATCH", 4096,
+                                                     std::uint64_t(1) << 30,
+                                                     detail::kCommitBatchBytes));
+}
+
 /// Reads every knob of the CUDA backend once, so that a value a knob does not accept throws
 /// InvalidInputError (naming the variable) before a query enqueues any work, not half-way
 /// through it. Each knob is read through the function that the query itself uses. With no
@@ -4163,6 +4189,8 @@ void readEveryKnob() {
   (void)rehashGraphOn();
   (void)countBuildOn(0);
   (void)staging::pinVerticesOn();
+  (void)commitCopyOn();
+  (void)commitBatch();
   (void)upperLevelsFor(0);
   (void)capacityKnob();
   (void)planeFilterOn();
@@ -4376,6 +4404,99 @@ void markDeformed(const HashedMesh<S>& mesh) {
     if (m.owner == &mesh || m.owner2 == &mesh) m.force_vertices = true;
 }
 
+namespace {
+/// startCommitCopy's copy: holds the backend (the context's lock) from the start of the check to
+/// finish(), and enqueues each checked range of the buffer on the context's stream into the
+/// entry's vertex array (staging::pinnedUploadRange: the registered pages straight, the partial
+/// pages at the buffer's ends through the entry's stage).
+template <class S>
+class DeviceCommitCopy final : public detail::CommitCopy {
+ public:
+  DeviceCommitCopy(std::unique_lock<std::mutex> lock, Context& ctx, CachedMesh<S>& m,
+                   const void* buffer, std::size_t bytes, std::size_t batch)
+      : lock_(std::move(lock)), ctx_(ctx), m_(m), src_(buffer), bytes_(bytes), batch_(batch) {}
+  DeviceCommitCopy(const DeviceCommitCopy&) = delete;
+  DeviceCommitCopy& operator=(const DeviceCommitCopy&) = delete;
+  ~DeviceCommitCopy() override { finish(false, 0); }
+
+  void piece(std::size_t offset, std::size_t bytes) noexcept override {
+    if (failed_ || offset != copied_ || bytes > bytes_ - offset) {
+      failed_ = true;  // not the next range: left to the query
+      return;
+    }
+    if (staging::pinnedUploadRange(m_.v.data(), src_, bytes_, offset, offset + bytes,
+                                   m_.staging.data(), ctx_.stream) != cudaSuccess) {
+      (void)cudaGetLastError();
+      failed_ = true;
+      return;
+    }
+    copied_ += bytes;
+  }
+
+  std::size_t batchBytes() const noexcept override { return batch_; }
+
+  void finish(bool ok, std::uint64_t version) noexcept override {
+    if (finished_) return;
+    finished_ = true;
+    // Every copy enqueued reads the buffer (or the stage): none may run after the commit.
+    if (cudaStreamSynchronize(ctx_.stream) != cudaSuccess) {
+      (void)cudaGetLastError();  // a sticky error fails the next query, which drops everything
+      failed_ = true;
+    }
+    if (ok && !failed_ && copied_ == bytes_) {
+      m_.commit_version = version;
+    } else {
+      m_.commit_version = 0;
+      // Positions of neither version: the next query uploads the mesh's own again, even where
+      // the refused commit left its version as it was.
+      if (copied_ > 0 || failed_) m_.force_vertices = true;
+    }
+    lock_.unlock();
+  }
+
+ private:
+  std::unique_lock<std::mutex> lock_;
+  Context& ctx_;
+  CachedMesh<S>& m_;
+  const void* src_;
+  std::size_t bytes_;
+  std::size_t batch_;
+  std::size_t copied_ = 0;  // the bytes enqueued, from offset 0
+  bool failed_ = false;
+  bool finished_ = false;
+};
+}  // namespace
+
+template <class S>
+std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<S>& mesh, const void* buffer,
+                                                    std::size_t bytes,
+                                                    const detail::HostPin& pin) {
+  if (bytes < kCommitCopyMinBytes || !pin.pinned() || pin.at() != buffer) return nullptr;
+  std::size_t batch = 0;
+  try {
+    if (!commitCopyOn()) return nullptr;
+    batch = commitBatch();
+  } catch (const InvalidInputError&) {
+    return nullptr;  // the next query reports the value
+  }
+  Context& ctx = context();
+  std::unique_lock<std::mutex> lock(ctx.mutex, std::try_to_lock);
+  if (!lock.owns_lock() || !ctx.ready) return nullptr;
+  for (CachedMesh<S>& m : ctx.meshes(static_cast<S*>(nullptr))) {
+    if (m.owner != &mesh || m.owner2 != nullptr) continue;
+    if (!m.valid || m.pending || m.nv != mesh.numVertices() || m.nv * sizeof(Vec3<S>) != bytes)
+      return nullptr;
+    try {
+      m.staging.reserve(bytes);  // (held already: the entry's uploads went through it)
+    } catch (const CudaError&) {
+      return nullptr;  // the next query meets the error
+    }
+    return std::unique_ptr<detail::CommitCopy>(
+        new DeviceCommitCopy<S>(std::move(lock), ctx, m, buffer, bytes, batch));
+  }
+  return nullptr;
+}
+
 template <class S>
 std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh) {
   Context& ctx = context();
@@ -4480,6 +4601,12 @@ template bool intersectJoint(const HashedMesh<double>&, const HashedMesh<double>
                              const QueryOptions&, AllPairsResult*);
 template void markDeformed(const HashedMesh<float>&);
 template void markDeformed(const HashedMesh<double>&);
+template std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<float>&,
+                                                             const void*, std::size_t,
+                                                             const detail::HostPin&);
+template std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<double>&,
+                                                             const void*, std::size_t,
+                                                             const detail::HostPin&);
 template std::vector<std::uint16_t> upperLevels(const HashedMesh<float>&);
 template std::vector<std::uint16_t> upperLevels(const HashedMesh<double>&);
 

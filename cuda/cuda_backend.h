@@ -95,6 +95,10 @@
 // with the HashedMesh, detail::HostPin, and dropped by it before that buffer can go;
 // updateVertices writes into the same buffer) and copied by one DMA from there, with no staging
 // copy (QueryProfile::pinned_uploads); KDET_FCL_CUDA_PIN_VERTICES=0 keeps the staged copy.
+// Such a buffer of kCommitCopyMinBytes or more that commitVertices checks goes to the device
+// while it is checked, and the next query skips its upload (startCommitCopy,
+// QueryProfile::commit_uploads; KDET_FCL_CUDA_COMMIT_COPY=0 leaves it to the query,
+// KDET_FCL_CUDA_COMMIT_BATCH=b sets the copy's batch; both read at every commit).
 // HashedMesh's passes in threads over such a buffer leave its lines out of the cores' private
 // caches, which halved that DMA's rate (src/cpu/dma_passes.h, KDET_FCL_DMA_PASSES).
 // The pairs come back through pinned memory in 256 KiB chunks, each appended to the result as it
@@ -124,9 +128,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "commit_copy.h"
 #include "kdet_fcl/hashed_mesh.h"
 #include "kdet_fcl/query.h"
 
@@ -254,6 +260,9 @@ struct QueryProfile {
                                 ///< never after updateVertices or markDeformed
   int pinned_uploads = 0;       ///< vertex uploads copied straight from the mesh's page-locked
                                 ///< buffer (KDET_FCL_CUDA_PIN_VERTICES; arrays of 256 KiB and up)
+  int commit_uploads = 0;       ///< vertex uploads skipped because commitVertices had copied the
+                                ///< positions while it checked them (startCommitCopy,
+                                ///< KDET_FCL_CUDA_COMMIT_COPY)
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
   bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)
@@ -325,6 +334,31 @@ QueryProfile lastQueryProfile();
 /// into them (updateVertices() itself only stores and validates them: the CPU re-hash is lazy).
 template <class S>
 void markDeformed(const HashedMesh<S>& mesh);
+
+/// The smallest vertex buffer that commitVertices copies to the device while it checks it
+/// (startCommitCopy): 1.5 MiB. On an H200's 16-thread host (kdet_bench's GPU frames, in one
+/// process with and without the copy) the buffers of 1.8-13.5 MB gained 11-19 % a frame (the 1M
+/// cloth 1.85-1.86 -> 1.58 ms); those of 0.5-1.2 MB moved by -5 to +4 %, within the runs'
+/// spread: their check is too short to hide the copy, and the commit then waits for it
+/// (benchmarks/RESULTS-gpu.md, "The commit's copy").
+constexpr std::size_t kCommitCopyMinBytes = std::size_t(1536) << 10;
+
+/// commitVertices' copy of `mesh`'s write buffer (`bytes` at `buffer`, whose registration is
+/// `pin`) to the device while it checks it (src/commit_copy.h), or nullptr where it would not
+/// pay or cannot be made: the buffer is smaller than kCommitCopyMinBytes or not registered
+/// (detail::HostPin: from its second upload on), the device holds no entry of `mesh` alone with as many
+/// vertices (one made by a query of it), another thread is using the device at the moment (the
+/// commit never waits for a query), or KDET_FCL_CUDA_COMMIT_COPY=0 (read at every commit; a
+/// value it does not accept is left for the next query to report). KDET_FCL_CUDA_COMMIT_BATCH=b
+/// (4096 bytes to 1 GiB, read at every commit) sets the copy's batch (default
+/// detail::kCommitBatchBytes). The copy holds the backend
+/// until finish(); on success the next query of `mesh` skips its vertex upload
+/// (QueryProfile::commit_uploads). Never throws a CUDA error: a copy that fails leaves the
+/// upload to the next query.
+template <class S>
+std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<S>& mesh, const void* buffer,
+                                                    std::size_t bytes,
+                                                    const detail::HostPin& pin);
 
 /// Per triangle of `mesh`, the bits its last device build recorded for self queries: bit 0 set
 /// (recorded), and bit k (1..15) set when level own + k holds a cell of the triangle's cell range

@@ -166,26 +166,39 @@ inline std::shared_ptr<void> pinHostMemory(const void* src, std::size_t bytes) {
   });
 }
 
-/// Copies `bytes` from `src`, whose whole pages pinHostMemory registered, to device memory
-/// `dst` on stream `s`: those pages by one DMA from `src` itself, the partial pages at both ends
-/// (under 4 KiB each) through `stage` (pinned, at least `bytes` long, at the same offsets). The
-/// caller synchronises `s` before `src` or the stage change again.
-inline cudaError_t pinnedUpload(void* dst, const void* src, std::size_t bytes, void* stage,
-                                cudaStream_t s) {
+/// Copies bytes [lo, hi) of the `bytes` at `src`, whose whole pages pinHostMemory registered, to
+/// the same offsets of device memory `dst` on stream `s`: what lies in those pages by one DMA
+/// from `src` itself, what lies in the partial pages at the buffer's ends (under 4 KiB each)
+/// through `stage` (pinned, at least `bytes` long, at the same offsets). The caller synchronises
+/// `s` before that part of `src` or of the stage changes again.
+inline cudaError_t pinnedUploadRange(void* dst, const void* src, std::size_t bytes,
+                                     std::size_t lo, std::size_t hi, void* stage,
+                                     cudaStream_t s) {
   const PageInterior in = pageInterior(src, bytes);
   auto* d = static_cast<char*>(dst);
   const auto* from = static_cast<const char*>(src);
   auto* h = static_cast<char*>(stage);
-  const std::size_t parts[2][2] = {{0, in.begin}, {in.end, bytes}};
-  for (const auto& part : parts) {
-    if (part[1] == part[0]) continue;
-    std::memcpy(h + part[0], from + part[0], part[1] - part[0]);
-    const cudaError_t e = cudaMemcpyAsync(d + part[0], h + part[0], part[1] - part[0],
-                                          cudaMemcpyHostToDevice, s);
+  // [0, in.begin) and [in.end, bytes) through the stage, [in.begin, in.end) straight.
+  const std::size_t parts[3][2] = {{0, in.begin}, {in.end, bytes}, {in.begin, in.end}};
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t a = std::max(lo, parts[k][0]), b = std::min(hi, parts[k][1]);
+    if (b <= a) continue;
+    const char* p = from + a;
+    if (k < 2) {
+      std::memcpy(h + a, p, b - a);
+      p = h + a;
+    }
+    const cudaError_t e = cudaMemcpyAsync(d + a, p, b - a, cudaMemcpyHostToDevice, s);
     if (e != cudaSuccess) return e;
   }
-  return cudaMemcpyAsync(d + in.begin, from + in.begin, in.end - in.begin,
-                         cudaMemcpyHostToDevice, s);
+  return cudaSuccess;
+}
+
+/// Copies `bytes` from `src`, whose whole pages pinHostMemory registered, to device memory
+/// `dst` on stream `s` (pinnedUploadRange over the whole buffer).
+inline cudaError_t pinnedUpload(void* dst, const void* src, std::size_t bytes, void* stage,
+                                cudaStream_t s) {
+  return pinnedUploadRange(dst, src, bytes, 0, bytes, stage, s);
 }
 
 /// Copies `bytes` from pageable host memory `src` to device memory `dst` through the pinned

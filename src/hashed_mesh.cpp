@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <type_traits>
 #include <string>
@@ -14,11 +15,19 @@
 #include <emmintrin.h>
 #endif
 
+#include "commit_copy.h"
 #include "cpu/dma_passes.h"
 #include "cpu/hierarchical_hash.h"
 #include "cpu/parallel.h"
 #include "kept_self_result.h"
 #include "kdet_fcl/errors.h"
+
+#ifndef KDET_FCL_HAVE_CUDA
+#define KDET_FCL_HAVE_CUDA 0
+#endif
+#if KDET_FCL_HAVE_CUDA
+#include "../cuda/cuda_backend.h"
+#endif
 
 namespace kdet_fcl {
 namespace {
@@ -153,50 +162,122 @@ int vertexThreads(std::size_t count, int threads) {
 
 using cpu::shareOf;
 
+/// The extents of the n parts at `parts` merged into *out (min, max and sums: the same bounds and
+/// the same verdict whatever the split); whether every coordinate was finite.
+template <class S>
+bool mergedBounds(const std::array<Extent<S>, 3>* parts, std::size_t n,
+                  detail::Aabb<double>* out) {
+  Extent<S> e[3];
+  for (std::size_t k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) {
+      e[a].sum += parts[k][a].sum;
+      e[a].lo = std::min(e[a].lo, parts[k][a].lo);
+      e[a].hi = std::max(e[a].hi, parts[k][a].hi);
+    }
+  *out = detail::Aabb<double>{{double(e[0].lo), double(e[1].lo), double(e[2].lo)},
+                              {double(e[0].hi), double(e[1].hi), double(e[2].hi)}};
+  return e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0);
+}
+
 /// The bounds of `v` in double (empty for no vertex), by takeRange in t threads (vertexThreads);
 /// false when a coordinate is not finite (its sum of x - x is then not 0). `demote`: each line of
 /// v leaves the reading core's private caches once read (takeRangeDemoting).
 template <class S>
 bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int t, bool demote) {
   const auto take = demote ? takeRangeDemoting<S> : takeRange<S>;
-  Extent<S> e[3];
   if (t <= 1) {
-    take(v.data(), v.size(), e);
-  } else {
-    // Each thread's share into its own extents, merged after (min, max and sums: the same bounds
-    // and the same verdict whatever the split).
-    const std::size_t per = shareOf(v.size(), t);
-    std::vector<std::array<Extent<S>, 3>> part(static_cast<std::size_t>(t));
-    cpu::parallelFor(v.size(), per, t, [&](std::size_t lo, std::size_t hi) {
-      take(v.data() + lo, hi - lo, part[lo / per].data());
-    });
-    for (const auto& p : part)
-      for (int a = 0; a < 3; ++a) {
-        e[a].sum += p[a].sum;
-        e[a].lo = std::min(e[a].lo, p[a].lo);
-        e[a].hi = std::max(e[a].hi, p[a].hi);
-      }
+    std::array<Extent<S>, 3> e;
+    take(v.data(), v.size(), e.data());
+    return mergedBounds(&e, 1, out);
   }
-  *out = detail::Aabb<double>{{double(e[0].lo), double(e[1].lo), double(e[2].lo)},
-                              {double(e[0].hi), double(e[1].hi), double(e[2].hi)}};
-  return e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0);
+  // Each thread's share into its own extents, merged after.
+  const std::size_t per = shareOf(v.size(), t);
+  std::vector<std::array<Extent<S>, 3>> part(static_cast<std::size_t>(t));
+  cpu::parallelFor(v.size(), per, t, [&](std::size_t lo, std::size_t hi) {
+    take(v.data() + lo, hi - lo, part[lo / per].data());
+  });
+  return mergedBounds(part.data(), part.size(), out);
 }
 
-/// The bounds of the new positions `v` (finiteBounds in t threads, vertexThreads' count,
-/// demoting each line where `demote`), or InvalidInputError naming the first non-finite
-/// coordinate, prefixed by `what` (updateVertices, commitVertices).
+/// InvalidInputError naming the first non-finite coordinate of `v`, prefixed by `what`
+/// (updateVertices, commitVertices).
 template <class S>
-detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int t, const char* what,
-                                   bool demote) {
-  detail::Aabb<double> b;
-  if (finiteBounds(v, &b, t, demote)) return b;
+[[noreturn]] void throwNonFinite(const std::vector<Vec3<S>>& v, const char* what) {
   TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
   probe.vertices = v;
   probe.validate(false, what);
   throw InvalidInputError(std::string(what) + ": a non-finite coordinate");
 }
 
+/// The bounds of the new positions `v` (finiteBounds in t threads, vertexThreads' count,
+/// demoting each line where `demote`), or throwNonFinite's error.
+template <class S>
+detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int t, const char* what,
+                                   bool demote) {
+  detail::Aabb<double> b;
+  if (finiteBounds(v, &b, t, demote)) return b;
+  throwNonFinite(v, what);
+}
+
 }  // namespace
+
+namespace detail {
+
+template <class S>
+bool checkedPieces(const std::vector<Vec3<S>>& v, int threads, bool demote, CommitCopy& copy,
+                   Aabb<double>* out) {
+  const auto take = demote ? takeRangeDemoting<S> : takeRange<S>;
+  const std::size_t n = v.size();
+  const std::size_t batch_bytes = std::max<std::size_t>(1, copy.batchBytes());
+  const std::size_t per =
+      std::max<std::size_t>(1, std::min(kCommitPieceBytes, batch_bytes) / sizeof(Vec3<S>));
+  const std::size_t pieces = std::max<std::size_t>(1, (n + per - 1) / per);
+  const std::size_t per_bytes = per * sizeof(Vec3<S>);
+  const std::size_t batch = std::max<std::size_t>(1, (batch_bytes + per_bytes - 1) / per_bytes);
+  std::vector<std::array<Extent<S>, 3>> part(pieces);
+  // done[c]: piece c was checked and found finite. `sent` pieces from the start have gone to the
+  // copy; whichever thread holds `sender` extends that run (never waiting for the lock: a thread
+  // that finds it taken goes on checking, and the caller sends what is left at the end).
+  std::unique_ptr<std::atomic<bool>[]> done(new std::atomic<bool>[pieces]);
+  for (std::size_t c = 0; c < pieces; ++c) done[c].store(false, std::memory_order_relaxed);
+  std::mutex sender;
+  std::size_t sent = 0;  // under `sender`
+  auto send = [&](std::size_t at_least) {
+    std::size_t k = sent;
+    while (k < pieces && done[k].load(std::memory_order_acquire)) ++k;
+    if (k - sent < at_least || k == sent) return;
+    const std::size_t lo = sent * per, hi = std::min(n, k * per);
+    if (hi > lo) copy.piece(lo * sizeof(Vec3<S>), (hi - lo) * sizeof(Vec3<S>));
+    sent = k;
+  };
+  std::atomic<bool> bad{false};
+  cpu::forEachChunk(pieces, threads, [&](std::size_t c) {
+    const std::size_t lo = std::min(n, c * per), hi = std::min(n, (c + 1) * per);
+    take(v.data() + lo, hi - lo, part[c].data());
+    const auto& e = part[c];
+    if (!(e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0))) {
+      bad.store(true, std::memory_order_relaxed);
+      return false;  // no further pieces: the commit fails
+    }
+    done[c].store(true, std::memory_order_release);
+    std::unique_lock<std::mutex> lock(sender, std::try_to_lock);
+    if (lock.owns_lock()) send(batch);
+    return true;
+  });
+  if (bad.load()) return false;
+  {
+    std::lock_guard<std::mutex> lock(sender);
+    send(1);  // the rest
+  }
+  return mergedBounds(part.data(), part.size(), out);
+}
+
+template bool checkedPieces(const std::vector<Vec3<float>>&, int, bool, CommitCopy&,
+                            Aabb<double>*);
+template bool checkedPieces(const std::vector<Vec3<double>>&, int, bool, CommitCopy&,
+                            Aabb<double>*);
+
+}  // namespace detail
 
 template <class S>
 struct HashedMesh<S>::Lazy {
@@ -311,13 +392,27 @@ void HashedMesh<S>::commitVertices() {
   // reads by DMA next (registered by the CUDA backend), of cpu::kDemoteMinBytes or more and
   // checked in several threads, leaves their caches line by line as it is read
   // (cpu/dma_passes.h).
+  // Where the GPU holds this mesh and reads the buffer by DMA next, the CUDA backend may take
+  // the buffer's checked pieces while the check goes on (commit_copy.h); the next query then
+  // skips the upload.
   const int t = vertexThreads<S>(write_buffer_.size(), threads_);
-  const bool demote = cpu::demoteWhileChecking(write_pin_.pinned(), t,
-                                               write_buffer_.size() * sizeof(Vec3<S>));
-  const detail::Aabb<double> b = checkedBounds(write_buffer_, t, "commitVertices", demote);
+  const std::size_t bytes = write_buffer_.size() * sizeof(Vec3<S>);
+  const bool demote = cpu::demoteWhileChecking(write_pin_.pinned(), t, bytes);
+  std::unique_ptr<detail::CommitCopy> copy;
+#if KDET_FCL_HAVE_CUDA
+  copy = cuda::startCommitCopy(*this, write_buffer_.data(), bytes, write_pin_);
+#endif
+  detail::Aabb<double> b;
+  if (!copy) {
+    b = checkedBounds(write_buffer_, t, "commitVertices", demote);
+  } else if (!detail::checkedPieces(write_buffer_, t, demote, *copy, &b)) {
+    copy->finish(false, 0);
+    throwNonFinite(write_buffer_, "commitVertices");
+  }
   mesh_.vertices.swap(write_buffer_);
   std::swap(host_pin_, write_pin_);
   geometryChanged(b);
+  if (copy) copy->finish(true, version_);
 }
 
 template <class S>

@@ -400,6 +400,8 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_COUNT_BUILD", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_BUILD_MAX", {"0", "150000", "4294967295"}, {"-1", "4294967296", "1e5"}},
       {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
+      {"KDET_FCL_CUDA_COMMIT_COPY", on_off, not_on_off},
+      {"KDET_FCL_CUDA_COMMIT_BATCH", {"4096", "262144", "1073741824"}, {"4095", "1073741825", "1M"}},
       {"KDET_FCL_CUDA_UPPER_LEVELS", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_ORDER", on_off, not_on_off},
       {"KDET_FCL_CUDA_ONE_TRIP", on_off, not_on_off},
@@ -847,15 +849,19 @@ TEST(CudaQuery, LargeVertexArraysAreCopiedStraightFromTheirRegisteredBuffer) {
 // upload and copied straight from after that (QueryProfile::pinned_uploads), with no comparison
 // of the triangles (the topology is kept); a refused commit leaves the device answering for the
 // positions before it. Every answer, self and inter, equals the CPU's.
+// The buffer is smaller than the commit's own copy takes (cuda::kCommitCopyMinBytes), so the
+// query uploads it (ACommitCopiesThePositionsWhileItChecksThem covers the copy).
 TEST(CudaQuery, CommittedVerticesAreUploadedFromBothRegisteredBuffers) {
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   kdet_test::ScopedEnv pin_default("KDET_FCL_CUDA_PIN_VERTICES", nullptr);
+  kdet_test::ScopedEnv copy_default("KDET_FCL_CUDA_COMMIT_COPY", nullptr);
   cuda::setProfiling(true);
   const int n = 320;  // 321^2 float vertices: 1.24 MB, registered from the second upload on
   auto frame = [&](double t) { return makeDrapedCloth<float>(n, 4.0f, 1.0f, 0.03f, float(t)); };
   HashedMesh<float> sphere(makeSphere<float>({0, 0, 0}, 1.0f, 32, 16));
   HashedMesh<float> cloth(frame(0.2));
+  ASSERT_LT(cloth.numVertices() * sizeof(Vec3<float>), cuda::kCommitCopyMinBytes);
   auto pinned = [&]() {
     const cuda::QueryProfile p = cuda::lastQueryProfile();
     return p.pinned_uploads > 0 ? p.pinned_uploads - p.rehash_fallbacks : 0;
@@ -878,6 +884,7 @@ TEST(CudaQuery, CommittedVerticesAreUploadedFromBothRegisteredBuffers) {
     if (f == 2 && cloth.hostPin().tried() && !cloth.hostPin().pinned())
       GTEST_SKIP() << "this machine refused to register host memory (cudaHostRegister)";
     EXPECT_EQ(p, f == 1 ? 0 : 1) << what;
+    EXPECT_EQ(cuda::lastQueryProfile().commit_uploads, 0) << what;
     EXPECT_EQ(cuda::lastQueryProfile().topology_compares, 0) << what;
     EXPECT_EQ(cloth.hostPin().at(), cloth.mesh().vertices.data()) << what;
     pairs += expectSameSelf(cloth, what + ", self");
@@ -893,6 +900,97 @@ TEST(CudaQuery, CommittedVerticesAreUploadedFromBothRegisteredBuffers) {
   const HashedMesh<float> same(TriangleMesh<float>{cloth.mesh()});
   EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs,
             sorted(intersectMeshes(same, sphere, on(Backend::Cpu)).pairs));
+  cuda::setProfiling(false);
+#endif
+}
+
+// commitVertices copies the positions to the device while it checks them (startCommitCopy),
+// once both of the mesh's buffers are registered (from the fourth commit here), and the next
+// query skips their upload (QueryProfile::commit_uploads). A 4.2 MB double cloth: the check runs
+// in several threads on a host of 8 or more, demoting the lines, and the copy goes in several
+// ranges. A refused commit whose first pieces went to the device leaves the device re-uploading
+// the positions the mesh kept; one refused at its first vertex sent nothing and changes nothing;
+// KDET_FCL_CUDA_COMMIT_COPY=0 leaves the upload to the query; a value it does not accept leaves
+// the commit alone and fails the next query. Every answer equals the CPU's.
+TEST(CudaQuery, ACommitCopiesThePositionsWhileItChecksThemAndARefusedOneLeavesTheDeviceRight) {
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  kdet_test::ScopedEnv pin_default("KDET_FCL_CUDA_PIN_VERTICES", nullptr);
+  kdet_test::ScopedEnv copy_default("KDET_FCL_CUDA_COMMIT_COPY", nullptr);
+  cuda::setProfiling(true);
+  const int n = 420;  // 421^2 double vertices: 4.25 MB
+  auto frame = [&](double t) { return makeDrapedCloth<double>(n, 4.0, 1.0, 0.03, t); };
+  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
+  HashedMesh<double> cloth(frame(0.2));
+  ASSERT_GE(cloth.numVertices() * sizeof(Vec3<double>), std::size_t(4) << 20);
+  auto commit = [&](double t) {
+    const TriangleMesh<double> next = frame(t);
+    std::copy(next.vertices.begin(), next.vertices.end(), cloth.vertexWriteBuffer());
+    cloth.commitVertices();
+  };
+  // The upload paths of the query after a commit: (from the commit, pinned).
+  auto paths = [] {
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    return std::make_pair(p.commit_uploads, p.pinned_uploads - p.rehash_fallbacks);
+  };
+  std::size_t pairs = expectSameInter(cloth, sphere, "first build");
+  // registered[f]: whether the buffer of frame f's positions was registered after its queries.
+  // The commit of frame f writes the buffer of frame f - 2 (the two alternate), and copies it
+  // exactly when that one is registered: from frame 3 or 4 on (a buffer is registered at its
+  // second upload, which a re-hash's fallback can make happen in its first frame).
+  std::vector<bool> registered = {cloth.hostPin().pinned()};
+  int copies = 0;
+  for (int f = 1; f <= 6; ++f) {
+    commit(0.2 + 0.1 * f);
+    const std::string what = "frame " + std::to_string(f);
+    pairs += expectSameInter(cloth, sphere, what);
+    if (f == 2 && cloth.hostPin().tried() && !cloth.hostPin().pinned())
+      GTEST_SKIP() << "this machine refused to register host memory (cudaHostRegister)";
+    const bool copied = f >= 2 && registered[std::size_t(f) - 2];
+    if (copied) {
+      EXPECT_EQ(paths(), std::make_pair(1, 0)) << what;
+      ++copies;
+    } else {
+      EXPECT_EQ(paths().first, 0) << what;
+    }
+    registered.push_back(cloth.hostPin().pinned());
+    pairs += expectSameSelf(cloth, what + ", self");
+  }
+  EXPECT_GE(copies, 2);  // frames 5 and 6 at least
+  EXPECT_GT(pairs, 0u);  // the frames test something
+  // Refused at its last vertex: the pieces before it went to the device.
+  for (std::size_t bad : {cloth.numVertices() - 1, std::size_t(0)}) {
+    const std::string what = "refused at vertex " + std::to_string(bad);
+    const std::vector<Vec3<double>> before = cloth.mesh().vertices;
+    const TriangleMesh<double> next = frame(0.95);
+    Vec3<double>* w = cloth.vertexWriteBuffer();
+    std::copy(next.vertices.begin(), next.vertices.end(), w);
+    w[bad].y = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(cloth.commitVertices(), InvalidInputError) << what;
+    EXPECT_EQ(cloth.mesh().vertices, before) << what;
+    expectSameInter(cloth, sphere, what);
+    // The last vertex's refusal sent the pieces before it: the positions go up again. The
+    // first vertex's sent nothing: the device's positions still stand.
+    EXPECT_EQ(paths(), std::make_pair(0, bad == 0 ? 0 : 1)) << what;
+    expectSameSelf(cloth, what + ", self");
+  }
+  commit(0.85);
+  expectSameInter(cloth, sphere, "after the refusals");
+  EXPECT_EQ(paths(), std::make_pair(1, 0));
+  {
+    kdet_test::ScopedEnv off("KDET_FCL_CUDA_COMMIT_COPY", "0");
+    commit(0.75);
+    expectSameInter(cloth, sphere, "copy off");
+    EXPECT_EQ(paths(), std::make_pair(0, 1));
+  }
+  {
+    kdet_test::ScopedEnv bad("KDET_FCL_CUDA_COMMIT_COPY", "2");
+    commit(0.65);  // the commit goes on without its copy
+    EXPECT_THROW(intersectMeshes(cloth, sphere, on(Backend::Cuda)), InvalidInputError);
+  }
+  expectSameInter(cloth, sphere, "after the bad knob");
+  EXPECT_EQ(paths(), std::make_pair(0, 1));
+  expectSameSelf(cloth, "after the bad knob, self");
   cuda::setProfiling(false);
 #endif
 }

@@ -90,7 +90,12 @@ class HashedMesh {
   /// vertexWriteBuffer() was never called since construction or setMesh(). A buffer of 4 MB or
   /// more that the CUDA backend has registered for its DMA, checked in several threads, is
   /// demoted from their private caches line by line as it is read (src/cpu/dma_passes.h; the
-  /// same knob as updateVertices).
+  /// same knob as updateVertices). Where the CUDA backend holds this mesh and has registered the
+  /// buffer (1.5 MiB and up, cuda_backend.h: startCommitCopy), the check goes in pieces and the
+  /// pieces found finite are copied to the device meanwhile; the commit returns once the copies
+  /// are done, and the next GPU query skips the upload. A refused commit leaves the device to
+  /// upload the positions the mesh kept. The commit never waits for another thread's GPU query
+  /// (it then leaves the upload to the query); KDET_FCL_CUDA_COMMIT_COPY=0 turns the copy off.
   void commitVertices();
 
   std::size_t numVertices() const { return mesh_.vertices.size(); }
