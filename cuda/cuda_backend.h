@@ -95,10 +95,10 @@
 // with the HashedMesh, detail::HostPin, and dropped by it before that buffer can go;
 // updateVertices writes into the same buffer) and copied by one DMA from there, with no staging
 // copy (QueryProfile::pinned_uploads); KDET_FCL_CUDA_PIN_VERTICES=0 keeps the staged copy.
-// Such a buffer of kCommitCopyMinBytes or more that commitVertices checks goes to the device
-// while it is checked, and the next query skips its upload (startCommitCopy,
+// Such a buffer of kCommitCopyMinBytes or more goes to the device while commitVertices checks
+// it or updateVertices writes it, and the next query skips its upload (startCommitCopy,
 // QueryProfile::commit_uploads; KDET_FCL_CUDA_COMMIT_COPY=0 leaves it to the query,
-// KDET_FCL_CUDA_COMMIT_BATCH=b sets the copy's batch; both read at every commit).
+// KDET_FCL_CUDA_COMMIT_BATCH=b sets the copy's batch; both read at every such call).
 // HashedMesh's passes in threads over such a buffer leave its lines out of the cores' private
 // caches, which halved that DMA's rate (src/cpu/dma_passes.h, KDET_FCL_DMA_PASSES).
 // The pairs come back through pinned memory in 256 KiB chunks, each appended to the result as it
@@ -260,8 +260,9 @@ struct QueryProfile {
                                 ///< never after updateVertices or markDeformed
   int pinned_uploads = 0;       ///< vertex uploads copied straight from the mesh's page-locked
                                 ///< buffer (KDET_FCL_CUDA_PIN_VERTICES; arrays of 256 KiB and up)
-  int commit_uploads = 0;       ///< vertex uploads skipped because commitVertices had copied the
-                                ///< positions while it checked them (startCommitCopy,
+  int commit_uploads = 0;       ///< vertex uploads skipped because commitVertices or
+                                ///< updateVertices had copied the positions to the device as
+                                ///< it passed over them (startCommitCopy,
                                 ///< KDET_FCL_CUDA_COMMIT_COPY)
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
   bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
@@ -343,15 +344,15 @@ void markDeformed(const HashedMesh<S>& mesh);
 /// (benchmarks/RESULTS-gpu.md, "The commit's copy").
 constexpr std::size_t kCommitCopyMinBytes = std::size_t(1536) << 10;
 
-/// commitVertices' copy of `mesh`'s write buffer (`bytes` at `buffer`, whose registration is
-/// `pin`) to the device while it checks it (src/commit_copy.h), or nullptr where it would not
-/// pay or cannot be made: the buffer is smaller than kCommitCopyMinBytes or not registered
-/// (detail::HostPin: from its second upload on), the device holds no entry of `mesh` alone with as many
-/// vertices (one made by a query of it), another thread is using the device at the moment (the
-/// commit never waits for a query), or KDET_FCL_CUDA_COMMIT_COPY=0 (read at every commit; a
-/// value it does not accept is left for the next query to report). KDET_FCL_CUDA_COMMIT_BATCH=b
-/// (4096 bytes to 1 GiB, read at every commit) sets the copy's batch (default
-/// detail::kCommitBatchBytes). The copy holds the backend
+/// A copy of a vertex buffer of `mesh` (`bytes` at `buffer`, whose registration is `pin`) to the
+/// device while commitVertices checks it or updateVertices writes it (src/commit_copy.h), or
+/// nullptr where it would not pay or cannot be made: the buffer is smaller than
+/// kCommitCopyMinBytes or not registered (detail::HostPin: from its second upload on), the
+/// device holds no entry of `mesh` alone with as many vertices (one made by a query of it),
+/// another thread is using the device at the moment (the call never waits for a query), or
+/// KDET_FCL_CUDA_COMMIT_COPY=0 (read at every call; a value it does not accept is left for the
+/// next query to report). KDET_FCL_CUDA_COMMIT_BATCH=b (4096 bytes to 1 GiB, read at every
+/// call) sets the copy's batch (default detail::kCommitBatchBytes). The copy holds the backend
 /// until finish(); on success the next query of `mesh` skips its vertex upload
 /// (QueryProfile::commit_uploads). Never throws a CUDA error: a copy that fails leaves the
 /// upload to the next query.

@@ -222,60 +222,103 @@ detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int t, const c
 }  // namespace
 
 namespace detail {
+namespace {
+
+/// The pieces of a pass over n elements of `elem` bytes with a copy whose batch is batch_bytes:
+/// `per` elements a piece (at most kCommitPieceBytes, and no more than the batch), `pieces`
+/// pieces (at least one), a batch of `batch` pieces.
+struct PieceLayout {
+  std::size_t per = 1, pieces = 1, batch = 1;
+};
+PieceLayout pieceLayout(std::size_t n, std::size_t elem, std::size_t batch_bytes) {
+  PieceLayout L;
+  batch_bytes = std::max<std::size_t>(1, batch_bytes);
+  L.per = std::max<std::size_t>(1, std::min(kCommitPieceBytes, batch_bytes) / elem);
+  L.pieces = std::max<std::size_t>(1, (n + L.per - 1) / L.per);
+  const std::size_t per_bytes = L.per * elem;
+  L.batch = std::max<std::size_t>(1, (batch_bytes + per_bytes - 1) / per_bytes);
+  return L;
+}
+
+/// work(c, lo, hi) for each piece c (elements [lo, hi)) of layout L on `threads` threads, the
+/// pieces taken in address order; work returns false to refuse its piece, and no further piece
+/// starts. Meanwhile the run of accepted pieces from the start goes to copy.piece() a batch at a
+/// time, by whichever thread finds the sender free (none waits for it), and the rest once every
+/// piece is done. Returns false when a piece was refused (nothing past it was sent then).
+template <class Work>
+bool pipelinedPieces(std::size_t n, std::size_t elem, const PieceLayout& L, int threads,
+                     CommitCopy& copy, Work&& work) {
+  // done[c]: piece c was accepted. `sent` pieces from the start have gone to the copy.
+  std::unique_ptr<std::atomic<bool>[]> done(new std::atomic<bool>[L.pieces]);
+  for (std::size_t c = 0; c < L.pieces; ++c) done[c].store(false, std::memory_order_relaxed);
+  std::mutex sender;
+  std::size_t sent = 0;  // under `sender`
+  auto send = [&](std::size_t at_least) {
+    std::size_t k = sent;
+    while (k < L.pieces && done[k].load(std::memory_order_acquire)) ++k;
+    if (k - sent < at_least || k == sent) return;
+    const std::size_t lo = sent * L.per, hi = std::min(n, k * L.per);
+    if (hi > lo) copy.piece(lo * elem, (hi - lo) * elem);
+    sent = k;
+  };
+  std::atomic<bool> refused{false};
+  cpu::forEachChunk(L.pieces, threads, [&](std::size_t c) {
+    const std::size_t lo = std::min(n, c * L.per), hi = std::min(n, (c + 1) * L.per);
+    if (!work(c, lo, hi)) {
+      refused.store(true, std::memory_order_relaxed);
+      return false;
+    }
+    done[c].store(true, std::memory_order_release);
+    std::unique_lock<std::mutex> lock(sender, std::try_to_lock);
+    if (lock.owns_lock()) send(L.batch);
+    return true;
+  });
+  if (refused.load()) return false;
+  std::lock_guard<std::mutex> lock(sender);
+  send(1);  // the rest
+  return true;
+}
+
+}  // namespace
 
 template <class S>
 bool checkedPieces(const std::vector<Vec3<S>>& v, int threads, bool demote, CommitCopy& copy,
                    Aabb<double>* out) {
   const auto take = demote ? takeRangeDemoting<S> : takeRange<S>;
-  const std::size_t n = v.size();
-  const std::size_t batch_bytes = std::max<std::size_t>(1, copy.batchBytes());
-  const std::size_t per =
-      std::max<std::size_t>(1, std::min(kCommitPieceBytes, batch_bytes) / sizeof(Vec3<S>));
-  const std::size_t pieces = std::max<std::size_t>(1, (n + per - 1) / per);
-  const std::size_t per_bytes = per * sizeof(Vec3<S>);
-  const std::size_t batch = std::max<std::size_t>(1, (batch_bytes + per_bytes - 1) / per_bytes);
-  std::vector<std::array<Extent<S>, 3>> part(pieces);
-  // done[c]: piece c was checked and found finite. `sent` pieces from the start have gone to the
-  // copy; whichever thread holds `sender` extends that run (never waiting for the lock: a thread
-  // that finds it taken goes on checking, and the caller sends what is left at the end).
-  std::unique_ptr<std::atomic<bool>[]> done(new std::atomic<bool>[pieces]);
-  for (std::size_t c = 0; c < pieces; ++c) done[c].store(false, std::memory_order_relaxed);
-  std::mutex sender;
-  std::size_t sent = 0;  // under `sender`
-  auto send = [&](std::size_t at_least) {
-    std::size_t k = sent;
-    while (k < pieces && done[k].load(std::memory_order_acquire)) ++k;
-    if (k - sent < at_least || k == sent) return;
-    const std::size_t lo = sent * per, hi = std::min(n, k * per);
-    if (hi > lo) copy.piece(lo * sizeof(Vec3<S>), (hi - lo) * sizeof(Vec3<S>));
-    sent = k;
-  };
-  std::atomic<bool> bad{false};
-  cpu::forEachChunk(pieces, threads, [&](std::size_t c) {
-    const std::size_t lo = std::min(n, c * per), hi = std::min(n, (c + 1) * per);
-    take(v.data() + lo, hi - lo, part[c].data());
-    const auto& e = part[c];
-    if (!(e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0))) {
-      bad.store(true, std::memory_order_relaxed);
-      return false;  // no further pieces: the commit fails
-    }
-    done[c].store(true, std::memory_order_release);
-    std::unique_lock<std::mutex> lock(sender, std::try_to_lock);
-    if (lock.owns_lock()) send(batch);
-    return true;
-  });
-  if (bad.load()) return false;
-  {
-    std::lock_guard<std::mutex> lock(sender);
-    send(1);  // the rest
-  }
-  return mergedBounds(part.data(), part.size(), out);
+  const PieceLayout L = pieceLayout(v.size(), sizeof(Vec3<S>), copy.batchBytes());
+  std::vector<std::array<Extent<S>, 3>> part(L.pieces);
+  const bool finite = pipelinedPieces(
+      v.size(), sizeof(Vec3<S>), L, threads, copy,
+      [&](std::size_t c, std::size_t lo, std::size_t hi) {
+        take(v.data() + lo, hi - lo, part[c].data());
+        const auto& e = part[c];
+        return e[0].sum == S(0) && e[1].sum == S(0) && e[2].sum == S(0);
+      });
+  return finite && mergedBounds(part.data(), part.size(), out);
+}
+
+template <class S>
+void copiedPieces(const std::vector<Vec3<S>>& src, Vec3<S>* dst, int threads, bool stream,
+                  CommitCopy& copy) {
+  const PieceLayout L = pieceLayout(src.size(), sizeof(Vec3<S>), copy.batchBytes());
+  pipelinedPieces(src.size(), sizeof(Vec3<S>), L, threads, copy,
+                  [&](std::size_t, std::size_t lo, std::size_t hi) {
+                    if (stream)
+                      cpu::streamCopy(dst + lo, src.data() + lo, (hi - lo) * sizeof(Vec3<S>));
+                    else
+                      std::copy(src.begin() + lo, src.begin() + hi, dst + lo);
+                    return true;
+                  });
 }
 
 template bool checkedPieces(const std::vector<Vec3<float>>&, int, bool, CommitCopy&,
                             Aabb<double>*);
 template bool checkedPieces(const std::vector<Vec3<double>>&, int, bool, CommitCopy&,
                             Aabb<double>*);
+template void copiedPieces(const std::vector<Vec3<float>>&, Vec3<float>*, int, bool,
+                           CommitCopy&);
+template void copiedPieces(const std::vector<Vec3<double>>&, Vec3<double>*, int, bool,
+                           CommitCopy&);
 
 }  // namespace detail
 
@@ -361,17 +404,29 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
   // Into a buffer the GPU reads by DMA next (registered by the CUDA backend), a copy in several
   // threads goes by non-temporal stores, leaving no line in their caches (cpu/dma_passes.h).
   const bool stream = cpu::streamCopyInto(host_pin_.pinned(), t);
-  // (One thread: a single chunk, copied in place by the caller's thread.)
-  cpu::parallelFor(vertices.size(), shareOf(vertices.size(), t), t,
-                   [&](std::size_t lo, std::size_t hi) {
-                     if (stream)
-                       cpu::streamCopy(mesh_.vertices.data() + lo, vertices.data() + lo,
-                                       (hi - lo) * sizeof(Vec3<S>));
-                     else
-                       std::copy(vertices.begin() + lo, vertices.begin() + hi,
-                                 mesh_.vertices.begin() + lo);
-                   });
+  // Where the GPU holds this mesh and reads the buffer by DMA next, the CUDA backend may take
+  // the copy's pieces as they are written (commit_copy.h); the next query then skips the upload.
+  std::unique_ptr<detail::CommitCopy> copy;
+#if KDET_FCL_HAVE_CUDA
+  copy = cuda::startCommitCopy(*this, mesh_.vertices.data(), vertices.size() * sizeof(Vec3<S>),
+                               host_pin_);
+#endif
+  if (copy) {
+    detail::copiedPieces(vertices, mesh_.vertices.data(), t, stream, *copy);
+  } else {
+    // (One thread: a single chunk, copied in place by the caller's thread.)
+    cpu::parallelFor(vertices.size(), shareOf(vertices.size(), t), t,
+                     [&](std::size_t lo, std::size_t hi) {
+                       if (stream)
+                         cpu::streamCopy(mesh_.vertices.data() + lo, vertices.data() + lo,
+                                         (hi - lo) * sizeof(Vec3<S>));
+                       else
+                         std::copy(vertices.begin() + lo, vertices.begin() + hi,
+                                   mesh_.vertices.begin() + lo);
+                     });
+  }
   geometryChanged(b);
+  if (copy) copy->finish(true, version_);
 }
 
 template <class S>

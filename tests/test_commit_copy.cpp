@@ -1,10 +1,12 @@
-// commitVertices' check with a copy (src/commit_copy.h, detail::checkedPieces), against a copy
-// that records what it is sent: the ranges follow each other from offset 0 and cover a finite
-// buffer exactly once, each but the last at least the copy's batch; the bounds and the verdict are the
-// plain check's; a buffer with a coordinate that is not finite is refused, and no range sent
-// reaches the piece that holds it. For float and double, on one and several threads, with and
-// without the lines' demotion. The CUDA backend's copy is tested on a device (test_cuda_query:
-// CommittedVerticesAreUploadedFromBothRegisteredBuffers, ACommitCopiesWhileItChecks...).
+// commitVertices' check and updateVertices' copy with a copy to the device (src/commit_copy.h,
+// detail::checkedPieces and copiedPieces), against a copy that records what it is sent: the
+// ranges follow each other from offset 0 and cover the buffer exactly once, each but the last at
+// least the copy's batch; the check's bounds and verdict are the plain check's, and the copy
+// writes every position and nothing beside; a buffer with a coordinate that is not finite is
+// refused, and no range sent reaches the piece that holds it. For float and double, on one and
+// several threads, with and without the lines' demotion or the non-temporal stores. The CUDA
+// backend's copy is tested on a device (test_cuda_query: ACommitCopiesThePositionsWhileIt...,
+// UpdateVerticesCopiesThePositionsWhileItWritesThem...).
 
 #include <gtest/gtest.h>
 
@@ -27,6 +29,7 @@ using kdet_fcl::Vec3;
 using kdet_fcl::detail::Aabb;
 using kdet_fcl::detail::CommitCopy;
 using kdet_fcl::detail::checkedPieces;
+using kdet_fcl::detail::copiedPieces;
 using kdet_fcl::detail::kCommitBatchBytes;
 using kdet_fcl::detail::kCommitPieceBytes;
 
@@ -87,6 +90,27 @@ std::pair<std::size_t, std::size_t> pieceAndBatch(std::size_t batch) {
   return {per, (batch + bytes - 1) / bytes};
 }
 
+/// The ranges sent for a buffer of n vertices follow each other from 0 and cover every byte
+/// once, each starting on a piece (`per` vertices) and each but the last at least a batch of
+/// whole pieces (the run grows by pieces); on one thread a buffer of more than two batches goes
+/// in two ranges at least (sent while the pass went on).
+template <class S>
+void expectConsecutiveRanges(const RecordingCopy& copy, std::size_t n, std::size_t per,
+                             std::size_t batch_pieces, int threads, const std::string& what) {
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < copy.ranges.size(); ++k) {
+    const auto [offset, bytes] = copy.ranges[k];
+    EXPECT_EQ(offset, at) << what << ", range " << k;
+    EXPECT_GT(bytes, 0u) << what << ", range " << k;
+    EXPECT_EQ(offset % (per * sizeof(Vec3<S>)), 0u) << what << ", range " << k;
+    if (k + 1 < copy.ranges.size())
+      EXPECT_GE(bytes, batch_pieces * per * sizeof(Vec3<S>)) << what << ", range " << k;
+    at = offset + bytes;
+  }
+  EXPECT_EQ(at, n * sizeof(Vec3<S>)) << what;
+  if (n > 2 * batch_pieces * per && threads == 1) EXPECT_GE(copy.ranges.size(), 2u) << what;
+}
+
 template <class S>
 void checkFiniteBuffers(std::size_t batch) {
   const auto [per, batch_pieces] = pieceAndBatch<S>(batch);
@@ -110,21 +134,35 @@ void checkFiniteBuffers(std::size_t batch) {
           EXPECT_EQ(b.lo[a], want.lo[a]) << what << ", axis " << a;
           EXPECT_EQ(b.hi[a], want.hi[a]) << what << ", axis " << a;
         }
-        // Consecutive ranges from 0 covering every byte once; each one but the last at least a
-        // batch of whole pieces (the run grows by pieces).
-        std::size_t at = 0;
-        for (std::size_t k = 0; k < copy.ranges.size(); ++k) {
-          const auto [offset, bytes] = copy.ranges[k];
-          EXPECT_EQ(offset, at) << what << ", range " << k;
-          EXPECT_GT(bytes, 0u) << what << ", range " << k;
-          EXPECT_EQ(offset % (per * sizeof(Vec3<S>)), 0u) << what << ", range " << k;
-          if (k + 1 < copy.ranges.size())
-            EXPECT_GE(bytes, batch_pieces * per * sizeof(Vec3<S>)) << what << ", range " << k;
-          at = offset + bytes;
-        }
-        EXPECT_EQ(at, n * sizeof(Vec3<S>)) << what;
-        if (n > 2 * batch_pieces * per && threads == 1)
-          EXPECT_GE(copy.ranges.size(), 2u) << what;  // sent while the check went on
+        expectConsecutiveRanges<S>(copy, n, per, batch_pieces, threads, what);
+      }
+}
+
+template <class S>
+void checkCopiedBuffers(std::size_t batch) {
+  const auto [per, batch_pieces] = pieceAndBatch<S>(batch);
+  const std::size_t sizes[] = {0, 1, per - 1, per, batch_pieces * per + 3,
+                               (std::size_t(5) << 20) / sizeof(Vec3<S>) + 2};
+  for (std::size_t n : sizes)
+    for (int threads : {1, 2, 4})
+      for (bool stream : {false, true}) {
+        const std::string what = "batch " + std::to_string(batch) + ", n " + std::to_string(n) +
+                                 ", threads " + std::to_string(threads) +
+                                 (stream ? ", non-temporal" : "");
+        const std::vector<Vec3<S>> src = positions<S>(n, unsigned(n % 89 + threads));
+        // One vertex of room on each side, which must stay as it was.
+        std::vector<Vec3<S>> dst(n + 2, Vec3<S>{S(-7), S(-7), S(-7)});
+        RecordingCopy copy(batch);
+        copiedPieces(src, dst.data() + 1, threads, stream, copy);
+        EXPECT_EQ(copy.finishes, 0) << what;
+        EXPECT_TRUE(std::equal(src.begin(), src.end(), dst.begin() + 1,
+                               [](const Vec3<S>& a, const Vec3<S>& b) {
+                                 return a.x == b.x && a.y == b.y && a.z == b.z;
+                               }))
+            << what;
+        for (std::size_t k : {std::size_t(0), n + 1})
+          EXPECT_TRUE(dst[k].x == S(-7) && dst[k].y == S(-7) && dst[k].z == S(-7)) << what;
+        expectConsecutiveRanges<S>(copy, n, per, batch_pieces, threads, what);
       }
 }
 
@@ -163,6 +201,13 @@ TEST(CommitCopy, AFiniteBufferIsSentOnceInOrderWithThePlainChecksBounds) {
   for (std::size_t batch : kBatches) {
     checkFiniteBuffers<float>(batch);
     checkFiniteBuffers<double>(batch);
+  }
+}
+
+TEST(CommitCopy, UpdateVerticesCopyWritesEveryPositionAndSendsTheRunWritten) {
+  for (std::size_t batch : kBatches) {
+    checkCopiedBuffers<float>(batch);
+    checkCopiedBuffers<double>(batch);
   }
 }
 

@@ -904,6 +904,32 @@ TEST(CudaQuery, CommittedVerticesAreUploadedFromBothRegisteredBuffers) {
 #endif
 }
 
+#if KDET_FCL_TEST_HAVE_CUDA
+/// The double cloth of the copy tests at time t: 421^2 vertices, 4.25 MB (above
+/// cuda::kCommitCopyMinBytes, and checked in several threads on a host of 8 or more).
+TriangleMesh<double> copyTestCloth(double t) {
+  return makeDrapedCloth<double>(420, 4.0, 1.0, 0.03, t);
+}
+
+/// The copy tests' scene: the upload knobs at their defaults and profiling on while it lives, a
+/// sphere and the cloth at t = 0.2.
+struct CopyTestScene {
+  kdet_test::ScopedEnv pin{"KDET_FCL_CUDA_PIN_VERTICES", nullptr};
+  kdet_test::ScopedEnv copy{"KDET_FCL_CUDA_COMMIT_COPY", nullptr};
+  HashedMesh<double> sphere{makeSphere<double>({0, 0, 0}, 1.0, 32, 16)};
+  HashedMesh<double> cloth{copyTestCloth(0.2)};
+  CopyTestScene() { cuda::setProfiling(true); }
+  ~CopyTestScene() { cuda::setProfiling(false); }
+};
+
+/// How the last GPU query had its vertices: (uploads skipped for a copy made by commitVertices
+/// or updateVertices, uploads straight from a registered buffer beyond a fallback's second one).
+std::pair<int, int> uploadPaths() {
+  const cuda::QueryProfile p = cuda::lastQueryProfile();
+  return std::make_pair(p.commit_uploads, p.pinned_uploads - p.rehash_fallbacks);
+}
+#endif
+
 // commitVertices copies the positions to the device while it checks them (startCommitCopy),
 // once both of the mesh's buffers are registered (from the fourth commit here), and the next
 // query skips their upload (QueryProfile::commit_uploads). A 4.2 MB double cloth: the check runs
@@ -915,24 +941,17 @@ TEST(CudaQuery, CommittedVerticesAreUploadedFromBothRegisteredBuffers) {
 TEST(CudaQuery, ACommitCopiesThePositionsWhileItChecksThemAndARefusedOneLeavesTheDeviceRight) {
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
-  kdet_test::ScopedEnv pin_default("KDET_FCL_CUDA_PIN_VERTICES", nullptr);
-  kdet_test::ScopedEnv copy_default("KDET_FCL_CUDA_COMMIT_COPY", nullptr);
-  cuda::setProfiling(true);
-  const int n = 420;  // 421^2 double vertices: 4.25 MB
-  auto frame = [&](double t) { return makeDrapedCloth<double>(n, 4.0, 1.0, 0.03, t); };
-  HashedMesh<double> sphere(makeSphere<double>({0, 0, 0}, 1.0, 32, 16));
-  HashedMesh<double> cloth(frame(0.2));
+  CopyTestScene scene;
+  HashedMesh<double>& cloth = scene.cloth;
+  const HashedMesh<double>& sphere = scene.sphere;
+  const auto frame = copyTestCloth;
   ASSERT_GE(cloth.numVertices() * sizeof(Vec3<double>), std::size_t(4) << 20);
   auto commit = [&](double t) {
     const TriangleMesh<double> next = frame(t);
     std::copy(next.vertices.begin(), next.vertices.end(), cloth.vertexWriteBuffer());
     cloth.commitVertices();
   };
-  // The upload paths of the query after a commit: (from the commit, pinned).
-  auto paths = [] {
-    const cuda::QueryProfile p = cuda::lastQueryProfile();
-    return std::make_pair(p.commit_uploads, p.pinned_uploads - p.rehash_fallbacks);
-  };
+  const auto paths = uploadPaths;
   std::size_t pairs = expectSameInter(cloth, sphere, "first build");
   // registered[f]: whether the buffer of frame f's positions was registered after its queries.
   // The commit of frame f writes the buffer of frame f - 2 (the two alternate), and copies it
@@ -991,7 +1010,62 @@ TEST(CudaQuery, ACommitCopiesThePositionsWhileItChecksThemAndARefusedOneLeavesTh
   expectSameInter(cloth, sphere, "after the bad knob");
   EXPECT_EQ(paths(), std::make_pair(0, 1));
   expectSameSelf(cloth, "after the bad knob, self");
-  cuda::setProfiling(false);
+#endif
+}
+
+// updateVertices copies the positions to the device as it writes them into the mesh's
+// registered buffer (startCommitCopy), from the update after the one whose query registered it;
+// the next query skips the upload. A refused update (checked before anything is written) leaves
+// the device's positions standing; KDET_FCL_CUDA_COMMIT_COPY=0 leaves the upload to the query.
+// Every answer equals the CPU's.
+TEST(CudaQuery, UpdateVerticesCopiesThePositionsWhileItWritesThemAndTheQuerySkipsTheUpload) {
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  CopyTestScene scene;
+  HashedMesh<double>& cloth = scene.cloth;
+  const HashedMesh<double>& sphere = scene.sphere;
+  const auto frame = copyTestCloth;
+  const void* buffer = cloth.mesh().vertices.data();
+  const auto paths = uploadPaths;
+  std::size_t pairs = expectSameInter(cloth, sphere, "first build");
+  int copies = 0;
+  for (int f = 1; f <= 5; ++f) {
+    const std::string what = "frame " + std::to_string(f);
+    const bool registered = cloth.hostPin().pinned();
+    cloth.updateVertices(frame(0.2 + 0.1 * f).vertices);
+    ASSERT_EQ(cloth.mesh().vertices.data(), buffer) << what;
+    pairs += expectSameInter(cloth, sphere, what);
+    if (f == 1 && cloth.hostPin().tried() && !cloth.hostPin().pinned())
+      GTEST_SKIP() << "this machine refused to register host memory (cudaHostRegister)";
+    if (registered) {
+      EXPECT_EQ(paths(), std::make_pair(1, 0)) << what;
+      ++copies;
+    } else {
+      EXPECT_EQ(paths().first, 0) << what;
+    }
+    pairs += expectSameSelf(cloth, what + ", self");
+  }
+  EXPECT_GE(copies, 4);  // every update after the first
+  EXPECT_GT(pairs, 0u);
+  {
+    std::vector<Vec3<double>> bad = frame(0.9).vertices;
+    bad.back().z = std::numeric_limits<double>::infinity();
+    const std::vector<Vec3<double>> before = cloth.mesh().vertices;
+    EXPECT_THROW(cloth.updateVertices(bad), InvalidInputError);
+    EXPECT_EQ(cloth.mesh().vertices, before);
+    expectSameInter(cloth, sphere, "after a refused update");
+    EXPECT_EQ(paths(), std::make_pair(0, 0));  // nothing changed, nothing uploaded
+  }
+  {
+    kdet_test::ScopedEnv off("KDET_FCL_CUDA_COMMIT_COPY", "0");
+    cloth.updateVertices(frame(0.8).vertices);
+    expectSameInter(cloth, sphere, "copy off");
+    EXPECT_EQ(paths(), std::make_pair(0, 1));
+  }
+  cloth.updateVertices(frame(0.75).vertices);
+  expectSameInter(cloth, sphere, "copy on again");
+  EXPECT_EQ(paths(), std::make_pair(1, 0));
+  expectSameSelf(cloth, "copy on again, self");
 #endif
 }
 

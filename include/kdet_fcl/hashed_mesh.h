@@ -69,7 +69,9 @@ class HashedMesh {
   /// hash stale: it is rebuilt by the next CPU query (or prepareCpuHash()), not here. Once the
   /// CUDA backend has registered that array for its DMA, a copy in several threads goes by
   /// non-temporal stores (src/cpu/dma_passes.h; KDET_FCL_DMA_PASSES=0|1 never, always; another
-  /// value of it throws InvalidInputError, the mesh unchanged).
+  /// value of it throws InvalidInputError, the mesh unchanged). Where the CUDA backend holds this
+  /// mesh and that array is registered (1.5 MiB and up), the copy goes in pieces and each run of
+  /// pieces written goes to the device meanwhile, as commitVertices' check does (see there).
   void updateVertices(const std::vector<Vec3<S>>& vertices);
 
   /// For a simulation that writes each frame's positions straight into the mesh, with no copy:

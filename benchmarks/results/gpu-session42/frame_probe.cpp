@@ -11,7 +11,9 @@
 // timed; the forms' order rotated by round), for knobs whose switch costs a rebuild (the build's
 // form, graphs); all ROUNDS rounds timed.
 // PROFILE=1 turns cuda::setProfiling on and prints each query's phases (medians), else only
-// host times (kdet_bench runs with profiling off). ROUNDS (default 8).
+// host times (kdet_bench runs with profiling off). ROUNDS (default 8). UPDATE=copy (since
+// session 43) takes a deforming object's positions by updateVertices from a buffer filled
+// untimed, as kdet_bench --gpu-update copy does, instead of commitVertices.
 // Each form's pairs must equal those of the first form run on the same frame and slot
 // ("MISMATCH", exit 1).
 // Build: g++ -O2 -std=c++17 -I include -I src -I . -I benchmarks frame_probe.cpp
@@ -99,6 +101,7 @@ int main(int argc, char** argv) {
   const int rounds = std::getenv("ROUNDS") ? std::atoi(std::getenv("ROUNDS")) : 8;
   const bool profile = std::getenv("PROFILE") && std::string(std::getenv("PROFILE")) == "1";
   const int block = std::getenv("BLOCK") ? std::atoi(std::getenv("BLOCK")) : 0;
+  const bool update_copy = std::getenv("UPDATE") && std::string(std::getenv("UPDATE")) == "copy";
   std::vector<std::string> want;
   for (int i = 1; i < argc; ++i) want.push_back(argv[i]);
   if (want.empty()) want = {"unc-n-body", "unc-n-body-pair"};
@@ -139,6 +142,7 @@ int main(int argc, char** argv) {
     if (!asked) continue;
     using HM = HashedMesh<double>;
     std::vector<std::unique_ptr<HM>> obj(s.objects.size());
+    std::vector<std::vector<Vec3<double>>> positions(s.objects.size());  // (UPDATE=copy)
     for (std::size_t o = 0; o < obj.size(); ++o)
       obj[o] = std::make_unique<HM>(*s.frames[0].meshes[o], s.frames[0].poses[o]);
     const std::size_t slots = s.inter.size() + s.self.size();
@@ -157,7 +161,15 @@ int main(int argc, char** argv) {
       double update = 0;
       for (std::size_t o = 0; o < obj.size(); ++o) {
         const kb::Motion m = s.motion[o];
-        if (m == kb::Motion::Deform) {
+        if (m == kb::Motion::Deform && update_copy) {
+          // kdet_bench --gpu-update copy: the simulation's own buffer (filled untimed), then
+          // updateVertices (timed).
+          const auto& v = fr.meshes[o]->vertices;
+          positions[o].assign(v.begin(), v.end());
+          const auto t0 = Clock::now();
+          obj[o]->updateVertices(positions[o]);
+          update += msSince(t0);
+        } else if (m == kb::Motion::Deform) {
           const auto& v = fr.meshes[o]->vertices;
           std::copy(v.begin(), v.end(), obj[o]->vertexWriteBuffer());  // untimed, as kdet_bench
           const auto t0 = Clock::now();
@@ -243,12 +255,12 @@ int main(int argc, char** argv) {
         }
     }
     std::printf("== %s (triangles %zu, frames %zu, inter %zu, self %zu; medians of %s, "
-                "profiling %s)\n",
+                "profiling %s%s)\n",
                 s.name.c_str(), s.triangles(0), s.frames.size(), s.inter.size(), s.self.size(),
                 block == 0 ? (std::to_string(rounds - 1) + " rounds").c_str()
                            : (std::to_string(rounds) + " blocks of " + std::to_string(block) +
                               " timed passes").c_str(),
-                profile ? "on" : "off");
+                profile ? "on" : "off", update_copy ? ", updateVertices" : "");
     std::map<std::string, std::string> lines;
     for (auto& [form, m] : t)
       for (auto& [k, v] : m) {
