@@ -931,8 +931,8 @@ std::pair<int, int> uploadPaths() {
 #endif
 
 // commitVertices copies the positions to the device while it checks them (startCommitCopy),
-// once both of the mesh's buffers are registered (from the fourth commit here), and the next
-// query skips their upload (QueryProfile::commit_uploads). A 4.2 MB double cloth: the check runs
+// once the buffer it commits is registered (from the third or fourth commit here), and the next
+// query skips their upload (QueryProfile::commit_uploads). A 4.25 MB double cloth: the check runs
 // in several threads on a host of 8 or more, demoting the lines, and the copy goes in several
 // ranges. A refused commit whose first pieces went to the device leaves the device re-uploading
 // the positions the mesh kept; one refused at its first vertex sent nothing and changes nothing;
