@@ -1871,7 +1871,7 @@ struct CachedMesh {
   std::size_t nv = 0, nt = 0;
   bool valid = false;  // false: the next use rebuilds
   bool force_vertices = false;
-  // The owner's version() whose positions commitVertices copied into `v` while checking them
+  // The owner's version() whose positions commitVertices or updateVertices copied into `v`
   // (startCommitCopy; the entry of one mesh alone), 0: none. The next rebuild skips their upload.
   std::uint64_t commit_version = 0;
   std::vector<Triangle> host_tris;  // what the device triangles hold, unshifted (topology check)
@@ -2645,7 +2645,7 @@ void rebuild(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh, bool upl
   // Each part's vertices (and triangles) go to their place in the arrays, through their own part
   // of the stage; the second part's vertex indices are then shifted past the first's vertices.
   // (`committed`: the first part's positions are on the device already, copied there by
-  // commitVertices; startCommitCopy.)
+  // commitVertices or updateVertices; startCommitCopy.)
   m.commit_version = 0;
   std::size_t v_at = 0, t_at = 0;
   for (int k = 0; k < 2; ++k) {
@@ -2762,10 +2762,10 @@ CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm, const HashedMesh<S
                                         m.host_tris.begin() + t0.size());
   };
   const bool same_topology = only_vertices || sameTriangles();
-  // commitVertices copied this version's positions into the device's array while it checked
-  // them (startCommitCopy, which takes an entry of one mesh with as many vertices).
-  const bool committed = same_topology && hm2 == nullptr && m.commit_version != 0 &&
-                         m.commit_version == hm.version() && m.nv == src.nv();
+  // commitVertices or updateVertices copied this version's positions into the device's array
+  // (startCommitCopy). It marks only a valid entry of one mesh with as many vertices, and any
+  // change since would have given the mesh a new version (versions start at 1: 0 never matches).
+  const bool committed = m.commit_version == hm.version();
   m.valid = false;
   rebuild(ctx, m, src, !same_topology, same_topology, committed);
   if (!same_topology) {

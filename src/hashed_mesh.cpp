@@ -219,6 +219,19 @@ detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int t, const c
   throwNonFinite(v, what);
 }
 
+/// The CUDA backend's copy of the `bytes` of `mesh`'s vertex buffer at `buffer` (registered as
+/// `pin`) while a vertex pass goes over it (commit_copy.h), or nullptr: none taken, or no CUDA.
+template <class S>
+std::unique_ptr<detail::CommitCopy> deviceCopy(const HashedMesh<S>& mesh, const void* buffer,
+                                               std::size_t bytes, const detail::HostPin& pin) {
+#if KDET_FCL_HAVE_CUDA
+  return cuda::startCommitCopy(mesh, buffer, bytes, pin);
+#else
+  (void)mesh, (void)buffer, (void)bytes, (void)pin;
+  return nullptr;
+#endif
+}
+
 }  // namespace
 
 namespace detail {
@@ -406,11 +419,8 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
   const bool stream = cpu::streamCopyInto(host_pin_.pinned(), t);
   // Where the GPU holds this mesh and reads the buffer by DMA next, the CUDA backend may take
   // the copy's pieces as they are written (commit_copy.h); the next query then skips the upload.
-  std::unique_ptr<detail::CommitCopy> copy;
-#if KDET_FCL_HAVE_CUDA
-  copy = cuda::startCommitCopy(*this, mesh_.vertices.data(), vertices.size() * sizeof(Vec3<S>),
-                               host_pin_);
-#endif
+  const std::unique_ptr<detail::CommitCopy> copy = deviceCopy(
+      *this, mesh_.vertices.data(), vertices.size() * sizeof(Vec3<S>), host_pin_);
   if (copy) {
     detail::copiedPieces(vertices, mesh_.vertices.data(), t, stream, *copy);
   } else {
@@ -453,10 +463,8 @@ void HashedMesh<S>::commitVertices() {
   const int t = vertexThreads<S>(write_buffer_.size(), threads_);
   const std::size_t bytes = write_buffer_.size() * sizeof(Vec3<S>);
   const bool demote = cpu::demoteWhileChecking(write_pin_.pinned(), t, bytes);
-  std::unique_ptr<detail::CommitCopy> copy;
-#if KDET_FCL_HAVE_CUDA
-  copy = cuda::startCommitCopy(*this, write_buffer_.data(), bytes, write_pin_);
-#endif
+  const std::unique_ptr<detail::CommitCopy> copy =
+      deviceCopy(*this, write_buffer_.data(), bytes, write_pin_);
   detail::Aabb<double> b;
   if (!copy) {
     b = checkedBounds(write_buffer_, t, "commitVertices", demote);
