@@ -17,7 +17,8 @@
 #   GPU_BENCH   1: also run the GPU benchmark (benchmarks/gpu_bench; log and CSV in OUT)
 #   TARGETS     build only these targets (space-separated; default: everything)
 #   CTEST_ALL   0: skip the run of the whole suite after the CUDA label (default 1)
-#   SANITIZER   1: also run compute-sanitizer memcheck and racecheck on a small CUDA test scene
+#   SANITIZER   1: also run compute-sanitizer memcheck and racecheck on small CUDA test scenes
+#               (queries, an overflow, 128-bit keys, both scans, the commit's and update's copies)
 #   PRECISION_BENCH  1: also run benchmarks/precision_bench (the speed/accuracy trade of the
 #               predicate modes on the CPU and the GPU; outputs in OUT/precision)
 # Exit status: 0 when the build and both test runs pass, else non-zero.
@@ -150,7 +151,8 @@ grep -E "tests passed|tests failed|The following tests" "$OUT/ctest.log" || true
 san_rc=0
 if [[ "${SANITIZER:-0}" == 1 ]]; then
   SAN="$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)"
-  filter='CudaQueryTyped/*.ClothOverSphereAndSelf:CudaQuery.OutputOverflowGrowsAndReruns:CudaQuery.HugeSizeRatioUsesFull128BitKeys:CudaQuery.WarpAndTileScansFindTheSameCandidatesAndPairs'
+  # (with the copies of commitVertices and updateVertices beside the queries' kernels)
+  filter='CudaQueryTyped/*.ClothOverSphereAndSelf:CudaQuery.OutputOverflowGrowsAndReruns:CudaQuery.HugeSizeRatioUsesFull128BitKeys:CudaQuery.WarpAndTileScansFindTheSameCandidatesAndPairs:CudaQuery.ACommitCopies*:CudaQuery.UpdateVerticesCopies*'
   for tool in memcheck racecheck; do
     log "compute-sanitizer --tool $tool (log: $OUT/sanitizer-$tool.log)"
     "$SAN" --tool "$tool" --error-exitcode 3 "$BUILD_DIR/tests/test_cuda_query" \
