@@ -1,0 +1,74 @@
+#pragma once
+// Session 44's CPU censuses (this folder): the self mesh of each kdet_bench scene named on the
+// command line (kdet_bench's keys; frame 1 where a scene has several, as session 40's census), as
+// a double mesh with its CPU hash, whose levels, cells and first-cell bits are the device's.
+// Build a census (repository root, after a build in build/):
+//   g++ -O2 -std=c++17 -I include -I src -I . -I build -I benchmarks -isystem /usr/include/eigen3
+//     benchmarks/results/gpu-session44/NAME.cpp benchmarks/bench_scenes.cpp -L build -lkdet_fcl
+//     -lfcl -lccd -o census
+// Run: KDET_FCL_DATA_DIR=../shared/data LD_LIBRARY_PATH=build ./census SCENE...
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "bench_scenes.h"
+#include "cpu/hierarchical_hash.h"
+#include "kdet_fcl/kdet_fcl.h"
+
+namespace census {
+
+using Hash = kdet_fcl::detail::HierarchicalHash<double>;
+
+/// Calls f(name, mesh, hash) for the self mesh of each scene named in argv[1..].
+template <class F>
+void forEachSelfMesh(int argc, char** argv, F&& f) {
+  kdet_bench::SceneConfig cfg;
+  cfg.frames = 3;
+  cfg.include_1m = true;
+  const char* d = std::getenv("KDET_FCL_DATA_DIR");
+  cfg.data_dir = d ? d : "";
+  std::vector<std::string> want;
+  for (int i = 1; i < argc; ++i) want.push_back(argv[i]);
+  for (const auto& s : kdet_bench::makeAllScenes(cfg, want)) {
+    if (s.self.empty() || s.frames.empty()) continue;
+    const std::size_t fr = s.frames.size() > 1 ? 1 : 0;
+    if (s.frames[fr].meshes.size() <= std::size_t(s.self[0])) continue;
+    const auto& src = *s.frames[fr].meshes[s.self[0]];
+    kdet_fcl::TriangleMesh<double> m;
+    for (const auto& v : src.vertices) m.vertices.push_back({v.x, v.y, v.z});
+    m.triangles = src.triangles;
+    Hash h;
+    h.build(m, 0);
+    f(s.name, m, h);
+    std::fflush(stdout);
+  }
+}
+
+/// The hash's cell tables (the upper one, and the lower one where it is another).
+inline std::vector<const Hash::Table*> tablesOf(const Hash& h) {
+  std::vector<const Hash::Table*> t = {&h.table(h.top_level)};
+  if (&h.table(0) != t[0]) t.push_back(&h.table(0));
+  return t;
+}
+
+/// A span's low and high slab on axis a (kdet_fcl::detail::subcellSpan's layout).
+inline unsigned spanLo(std::uint32_t span, int a) { return (span >> (5 * a)) & 15u; }
+inline unsigned spanHi(std::uint32_t span, int a) { return (span >> (15 + 5 * a)) & 15u; }
+
+/// Hash of a cell key for std::unordered_map.
+struct KeyHash {
+  std::size_t operator()(const kdet_fcl::detail::CellKey& k) const {
+    return kdet_fcl::detail::hashCellKey(k);
+  }
+};
+
+/// Whether two boxes overlap (closed intervals).
+inline bool boxesOverlap(const kdet_fcl::detail::Aabb<double>& p,
+                         const kdet_fcl::detail::Aabb<double>& q) {
+  return p.lo.x <= q.hi.x && q.lo.x <= p.hi.x && p.lo.y <= q.hi.y && q.lo.y <= p.hi.y &&
+         p.lo.z <= q.hi.z && q.lo.z <= p.hi.z;
+}
+
+}  // namespace census
