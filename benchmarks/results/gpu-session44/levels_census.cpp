@@ -4,7 +4,9 @@
 // levels (visited, canonical, spans overlapping), their visits together and the pairs whose boxes
 // overlap; under each row, the scan's visits that an early exit in cells sorted by an axis's low
 // slab would leave (the entries whose low slab is at most the query's high slab on that axis;
-// "both ends": also those whose high slab reaches the query's low slab).
+// "both ends": also those whose high slab reaches the query's low slab), and those a cell binned
+// by its entries' low slabs on all three axes would leave (bins above the query's high slab on
+// any axis skipped; halves: 8 bins, quarters: 64).
 //   levels_census SCENE...          grids whose level-0 cell is the default's times 2^(k/8),
 //                                   k = 0..7 (where the level boundaries cut the diameters)
 //   levels_census --floor SCENE...  the default grid with every triangle below level k lifted to
@@ -65,7 +67,7 @@ int main(int argc, char** argv) {
         return isCanonicalCell(h.boxes[a], h.boxes[b], levelScale(c.level), g, c.x, c.y, c.z);
       };
       double cp = 0, cc = 0, cs = 0, sv = 0, sc = 0, ss = 0, boxes = 0;
-      double exit_lo[3] = {0, 0, 0}, exit_both[3] = {0, 0, 0};
+      double exit_lo[3] = {0, 0, 0}, exit_both[3] = {0, 0, 0}, bins[3] = {0, 0, 0};
       for (int l = 0; l <= top; ++l)
         for (const auto& kv : cells[l]) {
           const CellId c = cellOfKey(kv.first);
@@ -94,11 +96,23 @@ int main(int argc, char** argv) {
                 for (std::uint32_t j : it->second) {
                   sv += 1;
                   const std::uint32_t es = subcellSpan(h.boxes[j], l, x, y, z, g);
+                  bool halves = true, quarters = true;
                   for (int a = 0; a < 3; ++a) {
                     const bool lo_ok = census::spanLo(es, a) <= census::spanHi(qs, a);
                     exit_lo[a] += lo_ok;
                     exit_both[a] += lo_ok && census::spanHi(es, a) >= census::spanLo(qs, a);
+                    halves = halves && census::spanLo(es, a) / 8 <= census::spanHi(qs, a) / 8;
+                    quarters = quarters && census::spanLo(es, a) / 4 <= census::spanHi(qs, a) / 4;
                   }
+                  bins[0] += halves;
+                  bins[1] += quarters;
+                  // (one run: the bins up to the last one the query needs, index 4x + 2y + z)
+                  unsigned eb = 0, qb = 0;
+                  for (int a = 0; a < 3; ++a) {
+                    eb = 2 * eb + census::spanLo(es, a) / 8;
+                    qb = 2 * qb + census::spanHi(qs, a) / 8;
+                  }
+                  bins[2] += eb <= qb;
                   if (!canon(std::uint32_t(i), j, CellId{l, x, y, z})) continue;
                   sc += 1;
                   const bool sp = subcellSpansOverlap(qs, es);
@@ -114,8 +128,10 @@ int main(int argc, char** argv) {
                   floors ? std::to_string(k).c_str() : std::to_string(k / 8.0).substr(0, 5).c_str(),
                   lv.c_str(), entries, cp, cc, cs, sv, sc, ss, cp + sv, boxes);
       std::printf("   scan visits under a low-slab early exit: x %.0f y %.0f z %.0f; both ends x %.0f "
-                  "y %.0f z %.0f\n",
-                  exit_lo[0], exit_lo[1], exit_lo[2], exit_both[0], exit_both[1], exit_both[2]);
+                  "y %.0f z %.0f; cells binned by the low slab's half (8 bins) %.0f, quarter (64 "
+                  "bins) %.0f, 8 bins in one run %.0f\n",
+                  exit_lo[0], exit_lo[1], exit_lo[2], exit_both[0], exit_both[1], exit_both[2],
+                  bins[0], bins[1], bins[2]);
     }
   });
   return 0;
