@@ -219,6 +219,17 @@ detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int t, const c
   throwNonFinite(v, what);
 }
 
+/// Copies src[lo, hi) to dst + lo: by non-temporal stores where `stream` (cpu::streamCopy, into a
+/// buffer the GPU reads by DMA next), else plainly.
+template <class S>
+void copyVertexRange(const std::vector<Vec3<S>>& src, Vec3<S>* dst, std::size_t lo,
+                     std::size_t hi, bool stream) {
+  if (stream)
+    cpu::streamCopy(dst + lo, src.data() + lo, (hi - lo) * sizeof(Vec3<S>));
+  else
+    std::copy(src.begin() + lo, src.begin() + hi, dst + lo);
+}
+
 /// The CUDA backend's copy of the `bytes` of `mesh`'s vertex buffer at `buffer` (registered as
 /// `pin`) while a vertex pass goes over it (commit_copy.h), or nullptr: none taken, or no CUDA.
 template <class S>
@@ -316,10 +327,7 @@ void copiedPieces(const std::vector<Vec3<S>>& src, Vec3<S>* dst, int threads, bo
   const PieceLayout L = pieceLayout(src.size(), sizeof(Vec3<S>), copy.batchBytes());
   pipelinedPieces(src.size(), sizeof(Vec3<S>), L, threads, copy,
                   [&](std::size_t, std::size_t lo, std::size_t hi) {
-                    if (stream)
-                      cpu::streamCopy(dst + lo, src.data() + lo, (hi - lo) * sizeof(Vec3<S>));
-                    else
-                      std::copy(src.begin() + lo, src.begin() + hi, dst + lo);
+                    copyVertexRange(src, dst, lo, hi, stream);
                     return true;
                   });
 }
@@ -427,12 +435,7 @@ void HashedMesh<S>::updateVertices(const std::vector<Vec3<S>>& vertices) {
     // (One thread: a single chunk, copied in place by the caller's thread.)
     cpu::parallelFor(vertices.size(), shareOf(vertices.size(), t), t,
                      [&](std::size_t lo, std::size_t hi) {
-                       if (stream)
-                         cpu::streamCopy(mesh_.vertices.data() + lo, vertices.data() + lo,
-                                         (hi - lo) * sizeof(Vec3<S>));
-                       else
-                         std::copy(vertices.begin() + lo, vertices.begin() + hi,
-                                   mesh_.vertices.begin() + lo);
+                       copyVertexRange(vertices, mesh_.vertices.data(), lo, hi, stream);
                      });
   }
   geometryChanged(b);

@@ -4,57 +4,17 @@
 # to the plane filter) against the defaults and a placebo knob. test_cuda_query whole under the
 # knob (the tests that compare candidate counts with the scan's are expected to differ); the frame
 # probe (session 42's), profiling off and on; gpu_bench's cloth ball, three processes per form.
-set -u
 cd "$(dirname "$0")/../../.."
-T=$OUT/times.txt
-date > $T
-nproc >> $T
-nvidia-smi --query-gpu=name,memory.total --format=csv >> $T 2>&1
-export KDET_FCL_DATA_DIR=$PWD/.gpu-data
-W=/tmp/s44c2
-mkdir -p $W
-D=$PWD/.fcl-debs/root
-L=$D/usr/lib/x86_64-linux-gnu
-export LD_LIBRARY_PATH=$L:$PWD/build-gpu
-cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=$D/usr -Dccd_DIR=$L/ccd \
-  -Doctomap_DIR=$D/usr/share/octomap -DKDET_FCL_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 \
-  -DKDET_FCL_CUDA_ARCHITECTURES=90 -DCMAKE_POLICY_VERSION_MINIMUM=3.5 \
-  "-DCMAKE_CXX_FLAGS=-isystem $D/usr/include/x86_64-linux-gnu" "-DCMAKE_EXE_LINKER_FLAGS=-L$L" \
-  -DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc > $W/build.log 2>&1
-cmake --build build-gpu --parallel 16 --target kdet_fcl >> $W/build.log 2>&1
-echo "lib rc=$? $(date +%T)" >> $T
-(cmake --build build-gpu --parallel 12 --target gpu_bench test_cuda_query > $W/build2.log 2>&1
- echo "bench+test build rc=$? $(date +%T)" >> $T) &
-BG=$!
-P=benchmarks/results/gpu-session42  # the frame probe of session 42, unchanged
-g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
-  -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 $P/frame_probe.cpp \
-  benchmarks/bench_scenes.cpp -L build-gpu -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath \
-  -Wl,--allow-shlib-undefined -o $W/probe > $W/probe-build.log 2>&1
-echo "probe build rc=$? $(date +%T)" >> $T
-SC="unc-cloth-ball unc-funnel unc-n-body cloth-20k cloth-90k cloth-250k cloth-1000k chair"
-F="base;KDET_FCL_CUDA_CELL_BOXES=0;KDET_FCL_CUDA_TILE=8"
-FORMS="$F" ROUNDS=13 timeout 150 $W/probe $SC > $W/probe-off.txt 2>&1
-echo "probe off rc=$? $(date +%T)" >> $T
-PROFILE=1 FORMS="$F" ROUNDS=13 timeout 150 $W/probe $SC > $W/probe-on.txt 2>&1
-echo "probe on rc=$? $(date +%T)" >> $T
-wait $BG
+. benchmarks/results/gpu-session44/ab_common.sh
+ab_build /tmp/s44c2 gpu_bench test_cuda_query
+ab_probe "base;KDET_FCL_CUDA_CELL_BOXES=0;KDET_FCL_CUDA_TILE=8" unc-cloth-ball unc-funnel \
+  unc-n-body cloth-20k cloth-90k cloth-250k cloth-1000k chair
+ab_wait
 KDET_FCL_CUDA_CELL_BOXES=0 build-gpu/tests/test_cuda_query --gtest_filter="*Cells*:*SparseCells*" > $W/test-cells.txt 2>&1
 echo "cells tests rc=$? $(date +%T)" >> $T
 tail -n 3 $W/test-cells.txt >> $T
 KDET_FCL_CUDA_CELL_BOXES=0 timeout 150 build-gpu/tests/test_cuda_query > $W/test-boxes.txt 2>&1
 echo "test_cuda_query under CELL_BOXES=0 rc=$? $(date +%T)" >> $T
 tail -n 3 $W/test-boxes.txt >> $T
-B=build-gpu/benchmarks/gpu_bench
-for r in 1 2 3; do
-  for w in 1 0; do
-    KDET_FCL_CUDA_CELL_BOXES=$w timeout 60 $B --data $KDET_FCL_DATA_DIR --no-fcl --no-cpu \
-      --repeats 20 --only unc-cloth-ball --csv $W/ball-$w-$r.csv >> $W/ball.log 2>&1
-    echo "cloth ball windows=$w $r rc=$? $(date +%T)" >> $T
-    if [ ! -f $OUT/ball.csv ]; then head -1 $W/ball-$w-$r.csv | sed 's/^/boxes,process,/' > $OUT/ball.csv; fi
-    tail -n +2 $W/ball-$w-$r.csv | sed "s/^/$w,$r,/" >> $OUT/ball.csv
-  done
-done
-date >> $T
-cp $W/probe-*.txt $OUT/
-tar czf $OUT/out.tgz -C $W --exclude=probe --exclude='*.csv' .
+ab_ball KDET_FCL_CUDA_CELL_BOXES 3 1 0
+ab_finish

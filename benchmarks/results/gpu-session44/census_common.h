@@ -64,6 +64,16 @@ struct KeyHash {
   }
 };
 
+/// Calls f(cell) for each cell (a CellId) of box b's cell range on `level`.
+template <class F>
+void forEachCell(const kdet_fcl::detail::Aabb<double>& b, int level,
+                 const kdet_fcl::detail::GridParams& g, F&& f) {
+  const kdet_fcl::detail::CellRange r = kdet_fcl::detail::cellRange(b, level, g);
+  for (auto x = r.lo[0]; x <= r.hi[0]; ++x)
+    for (auto y = r.lo[1]; y <= r.hi[1]; ++y)
+      for (auto z = r.lo[2]; z <= r.hi[2]; ++z) f(kdet_fcl::detail::CellId{level, x, y, z});
+}
+
 /// Whether two boxes overlap (closed intervals).
 inline bool boxesOverlap(const kdet_fcl::detail::Aabb<double>& p,
                          const kdet_fcl::detail::Aabb<double>& q) {

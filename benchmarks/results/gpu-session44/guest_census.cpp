@@ -29,14 +29,11 @@ int main(int argc, char** argv) {
     double native_entries = 0, guest_entries = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const auto put = [&](int l, bool guest) {
-        const CellRange r = cellRange(h.boxes[i], l, g);
-        for (auto x = r.lo[0]; x <= r.hi[0]; ++x)
-          for (auto y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (auto z = r.lo[2]; z <= r.hi[2]; ++z) {
-              Lists& c = cells[l][makeCellKey(l, x, y, z)];
-              (guest ? c.second : c.first).push_back(std::uint32_t(i));
-              (guest ? guest_entries : native_entries) += 1;
-            }
+        census::forEachCell(h.boxes[i], l, g, [&](const CellId& c) {
+          Lists& lists = cells[l][makeCellKey(l, c.x, c.y, c.z)];
+          (guest ? lists.second : lists.first).push_back(std::uint32_t(i));
+          (guest ? guest_entries : native_entries) += 1;
+        });
       };
       put(h.level[i], false);
       if (finer[h.level[i]] >= 0) put(finer[h.level[i]], true);
@@ -78,22 +75,18 @@ int main(int argc, char** argv) {
         }
       for (int l = h.level[i] + 1; l <= top; ++l) {
         if (!h.levelOccupied(l)) continue;
-        const CellRange r = cellRange(h.boxes[i], l, g);
-        for (auto x = r.lo[0]; x <= r.hi[0]; ++x)
-          for (auto y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (auto z = r.lo[2]; z <= r.hi[2]; ++z) {
-              const auto it = cells[l].find(makeCellKey(l, x, y, z));
-              if (it == cells[l].end()) continue;
-              const CellId c{l, x, y, z};
-              for (std::uint32_t j : it->second.first) {
-                const bool pass = canonSpans(std::uint32_t(i), j, c);
-                now_scan += 1;
-                now_pass += pass;
-                if (l == next) continue;
-                scan_visits += 1;
-                scan_pass += pass;
-              }
-            }
+        census::forEachCell(h.boxes[i], l, g, [&](const CellId& c) {
+          const auto it = cells[l].find(makeCellKey(l, c.x, c.y, c.z));
+          if (it == cells[l].end()) return;
+          for (std::uint32_t j : it->second.first) {
+            const bool pass = canonSpans(std::uint32_t(i), j, c);
+            now_scan += 1;
+            now_pass += pass;
+            if (l == next) continue;
+            scan_visits += 1;
+            scan_pass += pass;
+          }
+        });
       }
     }
     std::printf("%s: entries native %.0f guest %.0f | now: visits cells %.0f + scan %.0f = %.0f, "

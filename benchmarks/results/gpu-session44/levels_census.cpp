@@ -55,13 +55,10 @@ int main(int argc, char** argv) {
         lev[i] = levelFor(h.diameter[i], g);
         if (floors) lev[i] = std::max(lev[i], std::min(k, top));
         per[lev[i]]++;
-        const CellRange r = cellRange(h.boxes[i], lev[i], g);
-        for (auto x = r.lo[0]; x <= r.hi[0]; ++x)
-          for (auto y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (auto z = r.lo[2]; z <= r.hi[2]; ++z) {
-              cells[lev[i]][makeCellKey(lev[i], x, y, z)].push_back(std::uint32_t(i));
-              ++entries;
-            }
+        census::forEachCell(h.boxes[i], lev[i], g, [&](const CellId& c) {
+          cells[c.level][makeCellKey(c.level, c.x, c.y, c.z)].push_back(std::uint32_t(i));
+          ++entries;
+        });
       }
       const auto canon = [&](std::uint32_t a, std::uint32_t b, const CellId& c) {
         return isCanonicalCell(h.boxes[a], h.boxes[b], levelScale(c.level), g, c.x, c.y, c.z);
@@ -86,40 +83,36 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < n; ++i)
         for (int l = lev[i] + 1; l <= top; ++l) {
           if (cells[l].empty()) continue;
-          const CellRange r = cellRange(h.boxes[i], l, g);
-          for (auto x = r.lo[0]; x <= r.hi[0]; ++x)
-            for (auto y = r.lo[1]; y <= r.hi[1]; ++y)
-              for (auto z = r.lo[2]; z <= r.hi[2]; ++z) {
-                const auto it = cells[l].find(makeCellKey(l, x, y, z));
-                if (it == cells[l].end()) continue;
-                const std::uint32_t qs = subcellSpan(h.boxes[i], l, x, y, z, g);
-                for (std::uint32_t j : it->second) {
-                  sv += 1;
-                  const std::uint32_t es = subcellSpan(h.boxes[j], l, x, y, z, g);
-                  bool halves = true, quarters = true;
-                  for (int a = 0; a < 3; ++a) {
-                    const bool lo_ok = census::spanLo(es, a) <= census::spanHi(qs, a);
-                    exit_lo[a] += lo_ok;
-                    exit_both[a] += lo_ok && census::spanHi(es, a) >= census::spanLo(qs, a);
-                    halves = halves && census::spanLo(es, a) / 8 <= census::spanHi(qs, a) / 8;
-                    quarters = quarters && census::spanLo(es, a) / 4 <= census::spanHi(qs, a) / 4;
-                  }
-                  bins[0] += halves;
-                  bins[1] += quarters;
-                  // (one run: the bins up to the last one the query needs, index 4x + 2y + z)
-                  unsigned eb = 0, qb = 0;
-                  for (int a = 0; a < 3; ++a) {
-                    eb = 2 * eb + census::spanLo(es, a) / 8;
-                    qb = 2 * qb + census::spanHi(qs, a) / 8;
-                  }
-                  bins[2] += eb <= qb;
-                  if (!canon(std::uint32_t(i), j, CellId{l, x, y, z})) continue;
-                  sc += 1;
-                  const bool sp = subcellSpansOverlap(qs, es);
-                  ss += sp;
-                  boxes += sp && census::boxesOverlap(h.boxes[i], h.boxes[j]);
-                }
+          census::forEachCell(h.boxes[i], l, g, [&](const CellId& c) {
+            const auto it = cells[l].find(makeCellKey(l, c.x, c.y, c.z));
+            if (it == cells[l].end()) return;
+            const std::uint32_t qs = subcellSpan(h.boxes[i], l, c.x, c.y, c.z, g);
+            for (std::uint32_t j : it->second) {
+              sv += 1;
+              const std::uint32_t es = subcellSpan(h.boxes[j], l, c.x, c.y, c.z, g);
+              // The bins: halves and quarters of the low slabs on every axis; one run of the
+              // halves' bins up to the last the query needs (index 4x + 2y + z).
+              bool halves = true, quarters = true;
+              unsigned entry_bin = 0, query_bin = 0;
+              for (int a = 0; a < 3; ++a) {
+                const unsigned lo = census::spanLo(es, a), q_hi = census::spanHi(qs, a);
+                exit_lo[a] += lo <= q_hi;
+                exit_both[a] += lo <= q_hi && census::spanHi(es, a) >= census::spanLo(qs, a);
+                halves = halves && lo / 8 <= q_hi / 8;
+                quarters = quarters && lo / 4 <= q_hi / 4;
+                entry_bin = 2 * entry_bin + lo / 8;
+                query_bin = 2 * query_bin + q_hi / 8;
               }
+              bins[0] += halves;
+              bins[1] += quarters;
+              bins[2] += entry_bin <= query_bin;
+              if (!canon(std::uint32_t(i), j, c)) continue;
+              sc += 1;
+              const bool sp = subcellSpansOverlap(qs, es);
+              ss += sp;
+              boxes += sp && census::boxesOverlap(h.boxes[i], h.boxes[j]);
+            }
+          });
         }
       std::string lv;
       for (int l = 0; l <= top; ++l)

@@ -1,0 +1,75 @@
+# Sourced by this session's A/B device scripts (call1.sh, call2.sh, call4.sh), which run from the
+# repository root of the working tree's copy and carry .fcl-debs/root and .gpu-data.
+#   ab_build WORK TARGETS...   the machine into $T (= $OUT/times.txt), configure build-gpu with the
+#                              unpacked FCL packages, build the library, then TARGETS in the
+#                              background (ab_wait waits for them) while it builds session 42's
+#                              frame probe into WORK/probe
+#   ab_probe FORMS SCENES...   the probe over FORMS, profiling off, then on (WORK/probe-*.txt)
+#   ab_wait                    waits for ab_build's background targets
+#   ab_ball KNOB RUNS VALUES...  gpu_bench on the UNC cloth ball, RUNS rounds of one process per
+#                              VALUE of KNOB in turn; $OUT/ball.csv, its first column the value
+#   ab_finish                  the probes' outputs and the logs (out.tgz) into $OUT
+set -u
+T=$OUT/times.txt
+D=$PWD/.fcl-debs/root
+L=$D/usr/lib/x86_64-linux-gnu
+export KDET_FCL_DATA_DIR=$PWD/.gpu-data
+export LD_LIBRARY_PATH=$L:$PWD/build-gpu
+
+ab_build() {
+  W=$1
+  shift
+  mkdir -p $W
+  date > $T
+  nproc >> $T
+  nvidia-smi --query-gpu=name,memory.total --format=csv >> $T 2>&1
+  cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=$D/usr -Dccd_DIR=$L/ccd \
+    -Doctomap_DIR=$D/usr/share/octomap -DKDET_FCL_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 \
+    -DKDET_FCL_CUDA_ARCHITECTURES=90 -DCMAKE_POLICY_VERSION_MINIMUM=3.5 \
+    "-DCMAKE_CXX_FLAGS=-isystem $D/usr/include/x86_64-linux-gnu" "-DCMAKE_EXE_LINKER_FLAGS=-L$L" \
+    -DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc > $W/build.log 2>&1
+  cmake --build build-gpu --parallel 16 --target kdet_fcl >> $W/build.log 2>&1
+  echo "lib rc=$? $(date +%T)" >> $T
+  (cmake --build build-gpu --parallel 12 --target "$@" > $W/build2.log 2>&1
+   echo "bench+test build rc=$? $(date +%T)" >> $T) &
+  AB_BG=$!
+  local P=benchmarks/results/gpu-session42  # the frame probe of session 42, unchanged
+  g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
+    -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 $P/frame_probe.cpp \
+    benchmarks/bench_scenes.cpp -L build-gpu -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath \
+    -Wl,--allow-shlib-undefined -o $W/probe > $W/probe-build.log 2>&1
+  echo "probe build rc=$? $(date +%T)" >> $T
+}
+
+ab_probe() {
+  local forms=$1
+  shift
+  FORMS="$forms" ROUNDS=13 timeout 150 $W/probe "$@" > $W/probe-off.txt 2>&1
+  echo "probe off rc=$? $(date +%T)" >> $T
+  PROFILE=1 FORMS="$forms" ROUNDS=13 timeout 150 $W/probe "$@" > $W/probe-on.txt 2>&1
+  echo "probe on rc=$? $(date +%T)" >> $T
+}
+
+ab_wait() { wait $AB_BG; }
+
+ab_ball() {
+  local knob=$1 runs=$2 name=${1#KDET_FCL_CUDA_}
+  shift 2
+  for r in $(seq $runs); do
+    for w in "$@"; do
+      env $knob=$w timeout 60 build-gpu/benchmarks/gpu_bench --data $KDET_FCL_DATA_DIR --no-fcl \
+        --no-cpu --repeats 20 --only unc-cloth-ball --csv $W/ball-$w-$r.csv >> $W/ball.log 2>&1
+      echo "cloth ball $name=$w $r rc=$? $(date +%T)" >> $T
+      if [ ! -f $OUT/ball.csv ]; then
+        head -1 $W/ball-$w-$r.csv | sed "s/^/$name,process,/" > $OUT/ball.csv
+      fi
+      tail -n +2 $W/ball-$w-$r.csv | sed "s/^/$w,$r,/" >> $OUT/ball.csv
+    done
+  done
+}
+
+ab_finish() {
+  date >> $T
+  cp $W/probe-*.txt $OUT/
+  tar czf $OUT/out.tgz -C $W --exclude=probe --exclude='*.csv' .
+}
