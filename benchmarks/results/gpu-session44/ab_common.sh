@@ -5,7 +5,11 @@
 #                              background (ab_wait waits for them) while it builds session 42's
 #                              frame probe into WORK/probe
 #   ab_probe FORMS SCENES...   the probe over FORMS, profiling off, then on (WORK/probe-*.txt)
+#   ab_configure WORK          the machine into $T and configure build-gpu (ab_build's first step)
 #   ab_wait                    waits for ab_build's background targets
+#   ab_ncu KNOB VALUE FILE     ncu's kernel durations (phase 1's and the counting build's kernels,
+#                              no clock control) of gpu_bench's cloth ball under KNOB=VALUE, as
+#                              CSV into FILE (session 45)
 #   ab_ball KNOB RUNS VALUES...  gpu_bench on the UNC cloth ball, RUNS rounds of one process per
 #                              VALUE of KNOB in turn; $OUT/ball.csv, its first column the value
 #   ab_finish                  the probes' outputs and the logs (out.tgz) into $OUT
@@ -16,9 +20,8 @@ L=$D/usr/lib/x86_64-linux-gnu
 export KDET_FCL_DATA_DIR=$PWD/.gpu-data
 export LD_LIBRARY_PATH=$L:$PWD/build-gpu
 
-ab_build() {
+ab_configure() {
   W=$1
-  shift
   mkdir -p $W
   date > $T
   nproc >> $T
@@ -28,6 +31,11 @@ ab_build() {
     -DKDET_FCL_CUDA_ARCHITECTURES=90 -DCMAKE_POLICY_VERSION_MINIMUM=3.5 \
     "-DCMAKE_CXX_FLAGS=-isystem $D/usr/include/x86_64-linux-gnu" "-DCMAKE_EXE_LINKER_FLAGS=-L$L" \
     -DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc > $W/build.log 2>&1
+}
+
+ab_build() {
+  ab_configure $1
+  shift
   cmake --build build-gpu --parallel 16 --target kdet_fcl >> $W/build.log 2>&1
   echo "lib rc=$? $(date +%T)" >> $T
   (cmake --build build-gpu --parallel 12 --target "$@" > $W/build2.log 2>&1
@@ -66,6 +74,17 @@ ab_ball() {
       tail -n +2 $W/ball-$w-$r.csv | sed "s/^/$w,$r,/" >> $OUT/ball.csv
     done
   done
+}
+
+ab_ncu() {
+  local knob=$1 value=$2 file=$3
+  env $knob=$value timeout 120 $(command -v ncu || echo /usr/local/cuda/bin/ncu) \
+    --clock-control none \
+    -k 'regex:selfCandidatesWarp|selfCellPairs|interCandidatesWarp|countFill|countCells|scatterKernel|countClear' \
+    --metrics gpu__time_duration.sum --csv --print-units base \
+    build-gpu/benchmarks/gpu_bench --data $KDET_FCL_DATA_DIR --no-fcl --no-cpu --repeats 10 \
+    --only unc-cloth-ball > $file 2> ${file%.csv}.err
+  echo "ncu ${knob#KDET_FCL_CUDA_}=$value rc=$? $(date +%T)" >> $T
 }
 
 ab_finish() {

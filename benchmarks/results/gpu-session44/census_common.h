@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "bench_scenes.h"
@@ -72,6 +73,38 @@ void forEachCell(const kdet_fcl::detail::Aabb<double>& b, int level,
   for (auto x = r.lo[0]; x <= r.hi[0]; ++x)
     for (auto y = r.lo[1]; y <= r.hi[1]; ++y)
       for (auto z = r.lo[2]; z <= r.hi[2]; ++z) f(kdet_fcl::detail::CellId{level, x, y, z});
+}
+
+/// Each level's cells of the hash's own grid: cells[l] maps the key of a level-l cell to its
+/// triangles in index order (each triangle on its level, levelFor of its diameter, also given in
+/// `level` when asked for).
+using CellMap = std::unordered_map<kdet_fcl::detail::CellKey, std::vector<std::uint32_t>, KeyHash>;
+inline std::vector<CellMap> cellsOf(const Hash& h, std::vector<int>* level = nullptr) {
+  std::vector<CellMap> cells(h.top_level + 1);
+  if (level != nullptr) level->assign(h.diameter.size(), 0);
+  for (std::size_t i = 0; i < h.diameter.size(); ++i) {
+    const int l = kdet_fcl::detail::levelFor(h.diameter[i], h.grid);
+    if (level != nullptr) (*level)[i] = l;
+    forEachCell(h.boxes[i], l, h.grid, [&](const kdet_fcl::detail::CellId& c) {
+      cells[l][kdet_fcl::detail::makeCellKey(l, c.x, c.y, c.z)].push_back(std::uint32_t(i));
+    });
+  }
+  return cells;
+}
+
+/// Calls f(cell, entries) for each cell of box b's cell range on the levels from..top that
+/// `cells` holds, where cells[l] maps the key of a level-l cell to its entries (the scan of the
+/// coarser levels, from = the triangle's own level + 1).
+template <class Cells, class F>
+void forEachOccupiedCell(const kdet_fcl::detail::Aabb<double>& b, int from, int top,
+                         const kdet_fcl::detail::GridParams& g, const Cells& cells, F&& f) {
+  for (int l = from; l <= top; ++l) {
+    if (cells[l].empty()) continue;
+    forEachCell(b, l, g, [&](const kdet_fcl::detail::CellId& c) {
+      const auto it = cells[l].find(kdet_fcl::detail::makeCellKey(l, c.x, c.y, c.z));
+      if (it != cells[l].end()) f(c, it->second);
+    });
+  }
 }
 
 /// Whether two boxes overlap (closed intervals).

@@ -81,13 +81,11 @@ int main(int argc, char** argv) {
             }
         }
       for (std::size_t i = 0; i < n; ++i)
-        for (int l = lev[i] + 1; l <= top; ++l) {
-          if (cells[l].empty()) continue;
-          census::forEachCell(h.boxes[i], l, g, [&](const CellId& c) {
-            const auto it = cells[l].find(makeCellKey(l, c.x, c.y, c.z));
-            if (it == cells[l].end()) return;
+        census::forEachOccupiedCell(
+            h.boxes[i], lev[i] + 1, top, g, cells, [&](const CellId& c, const auto& e) {
+            const int l = c.level;
             const std::uint32_t qs = subcellSpan(h.boxes[i], l, c.x, c.y, c.z, g);
-            for (std::uint32_t j : it->second) {
+            for (std::uint32_t j : e) {
               sv += 1;
               const std::uint32_t es = subcellSpan(h.boxes[j], l, c.x, c.y, c.z, g);
               // The bins: halves and quarters of the low slabs on every axis; one run of the
@@ -113,7 +111,6 @@ int main(int argc, char** argv) {
               boxes += sp && census::boxesOverlap(h.boxes[i], h.boxes[j]);
             }
           });
-        }
       std::string lv;
       for (int l = 0; l <= top; ++l)
         if (per[l]) lv += std::to_string(l) + ":" + std::to_string(per[l]) + " ";
