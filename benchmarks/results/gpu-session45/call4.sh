@@ -1,6 +1,6 @@
 #!/bin/bash
-# Device call 4 (carry .fcl-debs/root and .gpu-data): the project's GPU check on this session's
-# final tree (the scan's grouped cells; the cells' skip of call 3 taken back), as a user with an
+# Device call 4 (carry .fcl-debs/root and .gpu-data): the project's GPU check on the tree with the
+# scan's grouped cells (groups.diff; the cells' skip of call 3 taken back), as a user with an
 # offline GPU box runs it: scripts/gpu_check.sh with the CUDA tests' and gpu_bench's targets,
 # ctest -L cuda, compute-sanitizer memcheck and racecheck (its filter now includes the groups'
 # test), and gpu_bench on the UNC cloth ball (issue 4's targets: the frame, and its two frames as
