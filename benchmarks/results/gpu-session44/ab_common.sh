@@ -12,6 +12,10 @@
 #                              CSV into FILE (session 45)
 #   ab_ball KNOB RUNS VALUES...  gpu_bench on the UNC cloth ball, RUNS rounds of one process per
 #                              VALUE of KNOB in turn; $OUT/ball.csv, its first column the value
+#   ab_check                   the project's GPU check as a user runs it: scripts/gpu_check.sh
+#                              with the CUDA tests' and gpu_bench's targets, ctest -L cuda, the
+#                              sanitizers and gpu_bench on the cloth ball ($OUT/check,
+#                              $OUT/gpu_check.log; session 44's call 3, session 45's call 4)
 #   ab_finish                  the probes' outputs and the logs (out.tgz) into $OUT
 set -u
 T=$OUT/times.txt
@@ -85,6 +89,17 @@ ab_ncu() {
     build-gpu/benchmarks/gpu_bench --data $KDET_FCL_DATA_DIR --no-fcl --no-cpu --repeats 10 \
     --only unc-cloth-ball > $file 2> ${file%.csv}.err
   echo "ncu ${knob#KDET_FCL_CUDA_}=$value rc=$? $(date +%T)" >> $T
+}
+
+ab_check() {
+  date > $T
+  OUT=$OUT/check CTEST_ALL=0 SANITIZER=1 GPU_BENCH=1 \
+    GPU_BENCH_ARGS="--no-fcl --no-cpu --repeats 20 --only unc-cloth-ball" \
+    TARGETS="test_cuda_device test_cuda_query test_cuda_bvh test_cuda_upload test_cuda_box_test test_cuda_warp_search test_cuda_predicates gpu_bench" \
+    timeout 570 scripts/gpu_check.sh > $OUT/gpu_check.log 2>&1
+  echo "gpu_check rc=$? $(date +%T)" >> $T
+  gzip -f $OUT/check/ctest.log $OUT/check/build.log 2>/dev/null
+  date >> $T
 }
 
 ab_finish() {

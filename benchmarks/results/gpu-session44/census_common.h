@@ -22,6 +22,15 @@ namespace census {
 
 using Hash = kdet_fcl::detail::HierarchicalHash<double>;
 
+/// A scene's mesh as a double mesh (the hash's input).
+template <class M>
+kdet_fcl::TriangleMesh<double> doubleMesh(const M& src) {
+  kdet_fcl::TriangleMesh<double> m;
+  for (const auto& v : src.vertices) m.vertices.push_back({v.x, v.y, v.z});
+  m.triangles = src.triangles;
+  return m;
+}
+
 /// Calls f(name, mesh, hash) for the self mesh of each scene named in argv[1..].
 template <class F>
 void forEachSelfMesh(int argc, char** argv, F&& f) {
@@ -36,10 +45,7 @@ void forEachSelfMesh(int argc, char** argv, F&& f) {
     if (s.self.empty() || s.frames.empty()) continue;
     const std::size_t fr = s.frames.size() > 1 ? 1 : 0;
     if (s.frames[fr].meshes.size() <= std::size_t(s.self[0])) continue;
-    const auto& src = *s.frames[fr].meshes[s.self[0]];
-    kdet_fcl::TriangleMesh<double> m;
-    for (const auto& v : src.vertices) m.vertices.push_back({v.x, v.y, v.z});
-    m.triangles = src.triangles;
+    const kdet_fcl::TriangleMesh<double> m = doubleMesh(*s.frames[fr].meshes[s.self[0]]);
     Hash h;
     h.build(m, 0);
     f(s.name, m, h);

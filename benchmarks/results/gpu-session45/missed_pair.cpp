@@ -5,26 +5,14 @@
 // coordinates (the device's two ways), and the entry's span in each of its cells. Output:
 // missed_pair.txt. Build and run as skip_rule_check.cpp.
 #include <cstdio>
-#include "bench_scenes.h"
-#include "cpu/hierarchical_hash.h"
-#include "kdet_fcl/kdet_fcl.h"
+#include "nbody_pair.h"
 using namespace kdet_fcl;
 using namespace kdet_fcl::detail;
 int main() {
-  kdet_bench::SceneConfig cfg;
-  cfg.data_dir = "../shared/data";
-  auto scenes = kdet_bench::makeAllScenes(cfg, {"unc-n-body"});
-  const auto& s = scenes.at(1);
-  const auto& fr = s.frames[0];
-  TriangleMesh<double> A, B;
-  for (auto* pm : {&A, &B}) {
-    const auto& src = *fr.meshes[pm == &A ? 0 : 1];
-    for (auto& v : src.vertices) pm->vertices.push_back({v.x, v.y, v.z});
-    pm->triangles = src.triangles;
-  }
-  HierarchicalHash<double> ha, hb;
-  ha.build(A, 0);
-  hb.build(B, 0);
+  NbodyPair p;
+  loadNbodyPair(p);
+  const auto &A = p.A, &B = p.B;
+  const auto &ha = p.ha, &hb = p.hb;
   const std::uint32_t i = 57312, j = 59964;
   std::printf("A tris %zu, B tris %zu; grid A cell0 %.9g origin %.9g %.9g %.9g; B cell0 %.9g origin %.9g %.9g %.9g\n",
     A.triangles.size(), B.triangles.size(), ha.grid.cell0, ha.grid.origin[0], ha.grid.origin[1], ha.grid.origin[2],

@@ -11,29 +11,17 @@
 //     -lkdet_fcl -lfcl -lccd -o skip_rule_check
 // Run: LD_LIBRARY_PATH=build ./skip_rule_check   (reads ../shared/data)
 #include <cstdio>
-#include "bench_scenes.h"
-#include "cpu/hierarchical_hash.h"
-#include "kdet_fcl/kdet_fcl.h"
+#include "nbody_pair.h"
 using namespace kdet_fcl;
 using namespace kdet_fcl::detail;
-static unsigned lo(std::uint32_t s, int a) { return (s >> (5 * a)) & 15u; }
-static unsigned hi(std::uint32_t s, int a) { return (s >> (15 + 5 * a)) & 15u; }
+using census::spanHi;
+using census::spanLo;
 int main() {
-  kdet_bench::SceneConfig cfg;
-  cfg.data_dir = "../shared/data";
-  auto scenes = kdet_bench::makeAllScenes(cfg, {"unc-n-body"});
-  const auto& s = scenes.at(1);
-  std::printf("%s\n", s.name.c_str());
-  const auto& fr = s.frames[0];
-  TriangleMesh<double> A, B;
-  for (auto* pm : {&A, &B}) {
-    const auto& src = *fr.meshes[pm == &A ? 0 : 1];
-    for (auto& v : src.vertices) pm->vertices.push_back({v.x, v.y, v.z});
-    pm->triangles = src.triangles;
-  }
-  HierarchicalHash<double> ha, hb;
-  ha.build(A, 0);
-  hb.build(B, 0);
+  NbodyPair p;
+  loadNbodyPair(p);
+  std::printf("unc-n-body-pair\n");
+  const auto &A = p.A, &B = p.B;
+  const auto &ha = p.ha, &hb = p.hb;
   // All intersecting inter pairs via the CPU library.
   HashedMesh<double> ma(A), mb(B);
   auto res = intersectMeshes(ma, mb);
@@ -64,13 +52,13 @@ int main() {
           ++checked;
           const bool spans = subcellSpansOverlap(qs, es);
           for (int a = 0; a < 3; ++a) {
-            const unsigned g = hi(es, a) < 8 ? 0 : (lo(es, a) >= 8 ? 2 : 1);
-            const bool skip = (hi(qs, a) < 8 && g == 2) || (lo(qs, a) >= 8 && g == 0);
+            const unsigned g = spanHi(es, a) < 8 ? 0 : (spanLo(es, a) >= 8 ? 2 : 1);
+            const bool skip = (spanHi(qs, a) < 8 && g == 2) || (spanLo(qs, a) >= 8 && g == 0);
             if (skip || !spans) {
               ++bad;
               if (bad < 10)
                 std::printf("pair (%u,%u) axis %d: skip %d spans %d q [%u,%u] e [%u,%u]\n", i, j, a,
-                            skip, spans, lo(qs, a), hi(qs, a), lo(es, a), hi(es, a));
+                            skip, spans, spanLo(qs, a), spanHi(qs, a), spanLo(es, a), spanHi(es, a));
             }
           }
         }
