@@ -90,6 +90,10 @@ struct MethodResult {
   std::vector<FrameRecord> frames;      ///< per frame, median over the timed repetitions
   std::vector<FrameRecord> check;       ///< the checking run (pairs)
   int timed_runs = 0;                   ///< runs the medians are taken over
+  /// Timed runs whose pair counts differ from the checking run's in some frame (the agreement
+  /// check reads the checking run's pairs only), and the first such difference.
+  int unsteady_runs = 0;
+  std::string unsteady;
 };
 
 double median(std::vector<double> v) {
@@ -103,6 +107,22 @@ double median(std::vector<double> v) {
 /// per-frame medians of the timed runs. With reps == 0 the checking run's times are reported.
 double g_rep_budget_s = 20;  ///< --rep-budget: seconds of timed runs per method and scene
 bool g_fresh_results = false;  ///< --fresh-results: the GPU runs' queries return new results
+std::string g_inject_unsteady;  ///< --inject-unsteady ID: test hook (one count changed, below)
+
+/// The first frame whose pair counts in `run` differ from the checking run's, described; empty
+/// when every frame's counts are the same.
+std::string pairCountsDiffer(const std::vector<FrameRecord>& check, const std::vector<FrameRecord>& run) {
+  if (run.size() != check.size())
+    return std::to_string(run.size()) + " frames, the checking run's " + std::to_string(check.size());
+  for (std::size_t f = 0; f < run.size(); ++f) {
+    const FrameRecord &a = check[f], &b = run[f];
+    if (a.self_pairs != b.self_pairs || a.inter_pairs != b.inter_pairs)
+      return "frame " + std::to_string(f) + ": " + std::to_string(b.self_pairs) + " self and " +
+             std::to_string(b.inter_pairs) + " inter pairs, the checking run's " +
+             std::to_string(a.self_pairs) + " and " + std::to_string(a.inter_pairs);
+  }
+  return {};
+}
 
 template <class F>
 void repeat(MethodResult& r, int reps, bool skip, const std::string& scene, F once) {
@@ -123,6 +143,17 @@ void repeat(MethodResult& r, int reps, bool skip, const std::string& scene, F on
       // timed repetitions: as many as fit in g_rep_budget_s, at least one.
       if (reps > 1 && run_s * reps > g_rep_budget_s)
         reps = std::max(1, int(g_rep_budget_s / std::max(run_s, 1e-9)));
+    }
+    if (rep > 0) {
+      // Every timed run must count the checking run's pairs in every frame: the agreement
+      // check compares the checking run's pairs only.
+      if (rep == 1 && r.id == g_inject_unsteady && !fr.empty()) ++fr.back().inter_pairs;
+      const std::string d = pairCountsDiffer(r.check, fr);
+      if (!d.empty()) {
+        if (r.unsteady_runs++ == 0) r.unsteady = "timed run " + std::to_string(rep) + ", " + d;
+        std::fprintf(stderr, "  *** UNSTEADY *** %s: %s timed run %d: %s\n", scene.c_str(),
+                     r.id.c_str(), rep, d.c_str());
+      }
     }
     if (rep > 0 || reps == 0) runs.push_back(std::move(fr));
   }
@@ -779,6 +810,7 @@ struct Options {
   std::vector<std::string> methods;  ///< run only methods whose id contains one of these
   GpuUpdate gpu_update = GpuUpdate::Commit;  ///< --gpu-update
   bool fresh_results = false;  ///< --fresh-results: the GPU runs' queries return new results
+  std::string inject_unsteady;  ///< --inject-unsteady ID (test hook)
 };
 
 /// Whether --methods asks for method `id`: a word ending in '$' names a whole id, any other word
@@ -815,9 +847,13 @@ bool methodWanted(const Options& o, const std::string& id) {
                "                 handed to updateVertices, which copies them\n"
                "  --fresh-results  the GPU methods' queries return new results (default: each reads\n"
                "                 its pairs back into a result kept from frame to frame)\n"
+               "  --inject-unsteady ID  (test of the check below) adds one pair to the count of\n"
+               "                 method ID's first timed run\n"
+               "Every timed run's pair counts must equal the checking run's, frame by frame.\n"
                "The UNC and FCL meshes come from $KDET_FCL_DATA_DIR, else ../shared/data beside the\n"
                "source tree; scenes whose files are missing are left out.\n"
-               "Exit code: 0 ok, 1 a disagreement settled against kDet, 2 usage.\n");
+               "Exit code: 0 ok, 1 a disagreement settled against kDet or pair counts that changed from\n"
+               "run to run, 2 usage.\n");
   std::exit(code);
 }
 
@@ -849,6 +885,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--rep-budget") g_rep_budget_s = std::stod(val());
     else if (a == "--no-kfree") o.kfree = false;
     else if (a == "--fresh-results") o.fresh_results = true;
+    else if (a == "--inject-unsteady") o.inject_unsteady = val();
     else if (a == "--gpu-update") {
       const std::string v = val();
       if (v != "commit" && v != "copy") usage(2);
@@ -1032,6 +1069,10 @@ std::string agreeCell(const SceneResult& r) {
       who += (who.empty() ? "" : ", ") + id;
     }
   }
+  std::string unsteady;
+  for (const auto& m : r.methods)
+    if (m.unsteady_runs > 0) unsteady += (unsteady.empty() ? "" : ", ") + m.id;
+  if (!unsteady.empty()) return "**NO: pair counts changed from run to run (" + unsteady + ")**";
   if (all) return "yes";
   if (kw) return "**NO: kDet wrong on " + std::to_string(kw) + " pairs**";
   return "settled for kDet (" + who + ")";
@@ -1173,6 +1214,9 @@ void writeMarkdown(const std::vector<SceneResult>& res, const Options& o, const 
           if (st.kdet_wrong) agree += " **kDet wrong: " + std::to_string(st.kdet_wrong) + "**";
         }
       }
+      if (m->unsteady_runs > 0)
+        agree += " **pair counts changed in " + std::to_string(m->unsteady_runs) + "/" +
+                 std::to_string(m->timed_runs) + " timed runs (" + m->unsteady + ")**";
       std::string title = methodTitle(id);
       if (m->self_as_pair && !isKdet(id) && std::string(id) != "fcl_obbrss_selfpair") title += " (mesh vs itself)";
       md << "| " << s.name << " | " << s.frames.size() << " | " << title << " | " << m->timed_runs << " | "
@@ -1237,7 +1281,7 @@ void writeJson(const std::vector<SceneResult>& res, const Options& o, const std:
          << ", \"build_ms\": " << jnum(x.build) << ", \"update_ms\": " << jnum(x.update) << ", \"query_ms\": "
          << jnum(x.query) << ", \"self_ms\": " << jnum(x.self) << ", \"inter_ms\": " << jnum(x.inter)
          << ", \"total_ms\": " << jnum(x.total) << ", \"comparable_ms\": " << jnum(x.comparable)
-         << ", \"pairs_per_frame\": " << jnum(x.pairs) << "}";
+         << ", \"pairs_per_frame\": " << jnum(x.pairs) << ", \"unsteady_runs\": " << m->unsteady_runs << "}";
     }
     js << "},\n     \"agreement\": {";
     first = true;
@@ -1427,6 +1471,12 @@ int exportScenes(const Options& o) {
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
   g_fresh_results = o.fresh_results;
+  g_inject_unsteady = o.inject_unsteady;
+  if (!o.inject_unsteady.empty() &&
+      std::find(std::begin(kMethodOrder), std::end(kMethodOrder), o.inject_unsteady) == std::end(kMethodOrder)) {
+    std::fprintf(stderr, "kdet_bench: --inject-unsteady: no method %s\n", o.inject_unsteady.c_str());
+    return 2;
+  }
   try {
     if (!o.export_dir.empty()) return exportScenes(o);
     const std::string load_before = loadAvg();
@@ -1447,10 +1497,11 @@ int main(int argc, char** argv) {
     }
     ::mkdir(o.out.c_str(), 0755);
     std::vector<SceneResult> res;
-    std::size_t kdet_wrong = 0;
+    std::size_t kdet_wrong = 0, unsteady = 0;
     for (const auto& s : scenes) {
       res.push_back(runScene(s, o));
       for (const auto& [id, st] : res.back().agreement) kdet_wrong += st.kdet_wrong;
+      for (const auto& m : res.back().methods) unsteady += m.unsteady_runs > 0;
       // Write after each scene so a long run leaves usable partial results.
       const std::string load_now = loadAvg();
       writeMarkdown(res, o, o.out + "/bench.md", load_before, load_now);
@@ -1471,10 +1522,12 @@ int main(int argc, char** argv) {
                   r.scene->name.c_str(), r.scene->triangles(0), k1.total, k2.total, k2.comparable, fo.total,
                   fo.total / k2.comparable, agreeCell(r).c_str());
     }
-    if (kdet_wrong) {
+    if (unsteady)
+      std::fprintf(stderr, "kdet_bench: *** UNSTEADY: %zu method(s) and scene(s) whose pair counts changed "
+                   "from run to run ***\n", unsteady);
+    if (kdet_wrong)
       std::fprintf(stderr, "kdet_bench: *** DISAGREEMENT settled against kDet on %zu pairs ***\n", kdet_wrong);
-      return 1;
-    }
+    if (kdet_wrong || unsteady) return 1;
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "kdet_bench: error: %s\n", e.what());

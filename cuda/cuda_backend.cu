@@ -222,6 +222,7 @@ __global__ void gridKernel(BuildReduce* red, BuildInfo* info, int async_key_bits
   in.need_sync = async_key_bits > 0 &&
                  (!in.fits64 || in.level_bits + 3 * in.coord_bits > async_key_bits);
   in.inserted = 0;
+  in.group_axis = kNoCellGroups;  // (a counting build sets its own: countFillKernel)
   *info = in;
   for (int a = 0; a < 3; ++a) red->lo[a] = ~0ull, red->hi[a] = 0;
   red->dmin_pos = ~0ull;
@@ -453,14 +454,15 @@ __device__ __forceinline__ T groupIncrement(T* counter, const Group& g) {
 // is sorted). Meshes of more than kCountBuildMaxTriangles keep the sort (KDET_FCL_CUDA_COUNT_BUILD
 // forces either, KDET_FCL_CUDA_COUNT_BUILD_MAX moves the limit).
 
-/// Empties the table and zeroes the per-slot counts and the per-cell counts [0, cells_n).
+/// Empties the table and zeroes the per-slot counts of the three groups (cellGroupOf; group g's
+/// count of slot s at slot_cnt[g * group_stride + s]) and the per-cell counts [0, cells_n).
 __global__ void countClearKernel(unsigned long long* __restrict__ slots, std::uint32_t slot_count,
-                                 std::uint32_t* __restrict__ slot_cnt,
+                                 std::uint32_t* __restrict__ slot_cnt, std::size_t group_stride,
                                  std::uint32_t* __restrict__ cell_count, std::uint32_t cells_n) {
   const std::uint32_t stride = gridDim.x * blockDim.x;
   for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < slot_count; k += stride) {
     slots[k] = kEmptySlot;
-    slot_cnt[k] = 0;
+    for (int g = 0; g < 3; ++g) slot_cnt[g * group_stride + k] = 0;
   }
   for (std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x; k < cells_n; k += stride)
     cell_count[k] = 0;
@@ -468,10 +470,13 @@ __global__ void countClearKernel(unsigned long long* __restrict__ slots, std::ui
 
 /// fillKernel's entries (index order, no size sort), one thread per entry e < cap, each counted
 /// in the slot of its cell's compact key (found, or claimed with atomicCAS along the probe
-/// sequence that a lookup walks): per entry its slot, its rank among the slot's entries and its
-/// value (entryValue). Entry e's triangle is the last i with offsets[i] <= e (warpEntryTriangle:
-/// the warp searches the scan of the triangles' cell counts), its cell the (e - offsets[i])-th
-/// of the triangle's range in fillKernel's order (x, then y, then z). More distinct cells than
+/// sequence that a lookup walks): per entry its slot, its rank among the slot's entries of its
+/// group and its value (entryValue). The group (cellGroupOf of the entry's sub-cell span on
+/// `axis`; always 1 with axis = kNoCellGroups) picks the slot's counter: group g counts at
+/// slot_cnt[g * group_stride + s], and the scatter lists a cell's groups in order. Entry e's
+/// triangle is the last i with offsets[i] <= e (warpEntryTriangle: the warp searches the scan of
+/// the triangles' cell counts), its cell the (e - offsets[i])-th of the triangle's range in
+/// fillKernel's order (x, then y, then z). More distinct cells than
 /// `cell_cap`, a probe past the whole table or a key of all ones set need_sync (the query then
 /// rebuilds with read-backs and reruns). need_sync is read once per thread, not per entry:
 /// polling it shares the sector of the counters' atomics, and work done after it is set is
@@ -483,18 +488,23 @@ __global__ void __launch_bounds__(kBuildBlock)
     countFillKernel(std::uint32_t n, const Aabb<S>* __restrict__ box,
                     const std::uint8_t* __restrict__ level, const std::uint32_t* __restrict__ offsets,
                     BuildInfo* info, unsigned long long* slots, std::uint32_t slot_count,
-                    std::uint32_t* __restrict__ slot_cnt, std::uint32_t* __restrict__ ent_slot,
-                    std::uint32_t* __restrict__ ent_rank, std::uint32_t* __restrict__ ent_val,
-                    std::uint32_t cap, std::uint32_t cell_cap) {
+                    std::uint32_t* __restrict__ slot_cnt, std::size_t group_stride, int axis,
+                    std::uint32_t* __restrict__ ent_slot, std::uint32_t* __restrict__ ent_rank,
+                    std::uint32_t* __restrict__ ent_val, std::uint32_t cap,
+                    std::uint32_t cell_cap) {
   const std::uint32_t e = blockIdx.x * blockDim.x + threadIdx.x;
   const std::uint32_t e0 = e - (threadIdx.x & 31u);  // the warp's first entry
   const std::uint32_t total = __ldg(offsets + n);
-  if (e == 0) info->entries = total;
+  if (e == 0) {
+    info->entries = total;
+    info->group_axis = axis;
+  }
   if (e0 >= cap || e0 >= total) return;  // (the whole warp)
   const std::uint32_t i = warpEntryTriangle(offsets, n, e0, e);
   if (e >= cap || e >= total || info->need_sync) return;
   const int l = level[i];
-  const detail::CellRange r = detail::cellRange(toDoubleBox(box[i]), l, info->grid);
+  const Aabb<double> bd = toDoubleBox(box[i]);
+  const detail::CellRange r = detail::cellRange(bd, l, info->grid);
   const std::uint64_t ny = static_cast<std::uint64_t>(r.hi[1] - r.lo[1] + 1);
   const std::uint64_t nz = static_cast<std::uint64_t>(r.hi[2] - r.lo[2] + 1);
   const std::uint64_t local = e - __ldg(offsets + i);
@@ -533,21 +543,30 @@ __global__ void __launch_bounds__(kBuildBlock)
   }
   const std::uint32_t first =
       (x == r.lo[0] ? 1u : 0u) | (y == r.lo[1] ? 2u : 0u) | (z == r.lo[2] ? 4u : 0u);
+  const unsigned int group =
+      axis < kNoCellGroups
+          ? cellGroupOf(detail::subcellSpan(bd, l, x, y, z, info->grid), axis)
+          : 1u;
   ent_slot[e] = s;
-  // The threads of a warp counting in the same slot take one atomic together.
-  ent_rank[e] = groupIncrement(slot_cnt + s, cg::labeled_partition(cg::coalesced_threads(), s));
+  // The threads of a warp counting in the same slot and group take one atomic together.
+  const unsigned long long label = (static_cast<unsigned long long>(s) << 2) | group;
+  ent_rank[e] = groupIncrement(slot_cnt + group * group_stride + s,
+                               cg::labeled_partition(cg::coalesced_threads(), label));
   ent_val[e] = entryValue(i, first);
 }
 
 /// One thread per slot: a claimed slot becomes a cell (the next index of info->cells), with its
-/// count (read from slot_words[s], which then holds the cell: ~0u for one not stored), its
-/// compact key in cell_key and the slot rewritten to the lookup form. Cells at or past
-/// `cell_cap` are counted but not stored (countFillKernel has set need_sync then), and their
-/// slots are emptied. After need_sync every slot is emptied and nothing else is written: the
-/// queries that run before the fallback then find no cell and read nothing past the arrays.
+/// count (the sum of its groups' counts, slot_words[g * group_stride + s]; slot_words[s] then
+/// holds the cell: ~0u for one not stored), its groups' ends (cell_split: groups 0 and 1, from
+/// its first entry), its compact key in cell_key and the slot rewritten to the lookup form.
+/// Cells at or past `cell_cap` are counted but not stored (countFillKernel has set need_sync
+/// then), and their slots are emptied. After need_sync every slot is emptied and nothing else is
+/// written: the queries that run before the fallback then find no cell and read nothing past the
+/// arrays.
 __global__ void countCellsKernel(BuildInfo* info, unsigned long long* slots,
                                  std::uint32_t slot_count, std::uint32_t* __restrict__ slot_words,
-                                 std::uint32_t* __restrict__ cell_count,
+                                 std::size_t group_stride, std::uint32_t* __restrict__ cell_count,
+                                 uint2* __restrict__ cell_split,
                                  unsigned long long* __restrict__ cell_key, std::uint32_t cell_cap) {
   const std::uint32_t s = blockIdx.x * blockDim.x + threadIdx.x;
   if (s >= slot_count) return;
@@ -565,15 +584,18 @@ __global__ void countCellsKernel(BuildInfo* info, unsigned long long* slots,
   }
   const detail::CellId id = compactKeyCell(key, info->coord_bits);
   const unsigned long long h = detail::hashCellKey(detail::makeCellKey(id.level, id.x, id.y, id.z));
-  cell_count[c] = slot_words[s];
+  const std::uint32_t n0 = slot_words[s], n1 = slot_words[group_stride + s];
+  cell_count[c] = n0 + n1 + slot_words[2 * group_stride + s];
+  cell_split[c] = make_uint2(n0, n0 + n1);
   slot_words[s] = c;
   cell_key[c] = key;
   slots[s] = slotValue(h, c);
 }
 
 /// One thread per entry of countFillKernel: its place (its cell's first entry, from the scan of
-/// the counts, plus its rank), its value and sub-cell span there, and, for every 32nd place, the
-/// cell (block_cell, as cellsKernel). Nothing after need_sync.
+/// the counts, plus the start of its group in the cell, cell_split, plus its rank in the group),
+/// its value and sub-cell span there, and, for every 32nd place, the cell (block_cell, as
+/// cellsKernel). `axis` as countFillKernel's. Nothing after need_sync.
 template <class S>
 __global__ void __launch_bounds__(kBuildBlock)
     scatterKernel(std::uint32_t cap, const BuildInfo* info,
@@ -582,6 +604,7 @@ __global__ void __launch_bounds__(kBuildBlock)
                   const std::uint32_t* __restrict__ ent_val,
                   const std::uint32_t* __restrict__ slot_cell,
                   const std::uint32_t* __restrict__ cell_begin,
+                  const uint2* __restrict__ cell_split, int axis,
                   const unsigned long long* __restrict__ cell_key, const Aabb<S>* __restrict__ box,
                   std::uint32_t* __restrict__ entry_tri, std::uint32_t* __restrict__ entry_span,
                   std::uint32_t* __restrict__ block_cell) {
@@ -589,12 +612,17 @@ __global__ void __launch_bounds__(kBuildBlock)
   if (k >= writtenEntries(info, cap)) return;
   const std::uint32_t c = slot_cell[ent_slot[k]];
   if (c == ~0u) return;
-  const std::uint32_t pos = cell_begin[c] + ent_rank[k];
   const std::uint32_t v = ent_val[k];
   const detail::CellId id = compactKeyCell(cell_key[c], info->coord_bits);
   const Aabb<double> bd = toDoubleBox(box[v & kEntryTriMask]);
+  const std::uint32_t span = detail::subcellSpan(bd, id.level, id.x, id.y, id.z, info->grid);
+  // (The same span as countFillKernel's for this entry, so the same group.)
+  const unsigned int group = axis < kNoCellGroups ? cellGroupOf(span, axis) : 1u;
+  const uint2 split = cell_split[c];
+  const std::uint32_t pos =
+      cell_begin[c] + (group == 0 ? 0u : (group == 1 ? split.x : split.y)) + ent_rank[k];
   entry_tri[pos] = v;
-  entry_span[pos] = detail::subcellSpan(bd, id.level, id.x, id.y, id.z, info->grid);
+  entry_span[pos] = span;
   if ((pos & 31u) == 0) block_cell[pos >> 5] = c;
 }
 
@@ -1882,12 +1910,14 @@ struct CachedMesh {
   DeviceBuffer<double> diam;
   DeviceBuffer<std::uint8_t> level;
   DeviceBuffer<std::uint32_t> entry_tri, entry_span, cell_begin;
+  DeviceBuffer<uint2> cell_split;  // HashView::cell_split (counting builds), as many as cell_begin
   DeviceBuffer<std::uint32_t> block_cell;     // the cell of every 32nd entry (cellsKernel)
   DeviceBuffer<unsigned long long> cell_key;  // key_words per cell
   DeviceBuffer<unsigned long long> slots;
   DeviceBuffer<std::uint32_t> upper;  // HashView::upper (upperLevelsKernel), 2 bytes per triangle
   bool upper_ready = false;           // the last build wrote `upper` (else queries scan all levels)
   bool count_build = false;  // the last build grouped its entries by counting (countFillKernel)
+  int group_axis = kNoCellGroups;  // a counting build's group axis (cellGroupAxis, at its build)
   DeviceBuffer<BuildInfo> dinfo;  // this mesh's grid and sizes, on the device
   PinnedBuffer staging;  // vertex/triangle uploads (per mesh: two uploads can be in flight)
   std::uint32_t slot_count = 0;
@@ -1938,6 +1968,7 @@ struct CachedMesh {
     h.entry_tri = entry_tri.data();
     h.entry_span = entry_span.data();
     h.cell_begin = cell_begin.data();
+    h.cell_split = cell_split.data();
     h.cell_key = cell_key.data();
     h.slots = slots.data();
     h.upper = upper_ready ? upper.data() : nullptr;
@@ -1947,8 +1978,8 @@ struct CachedMesh {
   }
   std::size_t bytes() const {
     return v.bytes() + t.bytes() + box.bytes() + diam.bytes() + level.bytes() +
-           entry_tri.bytes() + entry_span.bytes() + cell_begin.bytes() + block_cell.bytes() +
-           cell_key.bytes() + slots.bytes() + upper.bytes() + dinfo.bytes();
+           entry_tri.bytes() + entry_span.bytes() + cell_begin.bytes() + cell_split.bytes() +
+           block_cell.bytes() + cell_key.bytes() + slots.bytes() + upper.bytes() + dinfo.bytes();
   }
 };
 
@@ -2169,6 +2200,15 @@ bool countBuildOn(std::size_t nt) {
   return detail::switchKnob("KDET_FCL_CUDA_COUNT_BUILD", nt <= most);
 }
 
+/// The axis on which a counting build groups each cell's entries (cellGroupOf, so that the
+/// warp-wide scans visit one run of a cell: cellGroupRun): KDET_FCL_CUDA_CELL_GROUPS = 0 (none,
+/// kNoCellGroups), 1, 2 or 3 (x, y or z); unset: y. Read at every counting build (a graph's
+/// key holds it). The choice changes the work, never the pairs.
+int cellGroupAxis() {
+  const std::uint64_t v = detail::numberKnob("KDET_FCL_CUDA_CELL_GROUPS", 0, 3, 2);
+  return v == 0 ? kNoCellGroups : static_cast<int>(v) - 1;
+}
+
 /// Whether a re-hash without read-back of `m` (`nt` triangles) is a counting build: its cells
 /// need no size order, and countBuildOn.
 template <class S>
@@ -2188,7 +2228,7 @@ std::size_t wordsFor32(std::size_t k) { return wordsFor64((k + 1) / 2); }
 std::size_t countBuildWords(std::uint32_t cap, std::uint32_t slot_count, std::uint32_t cell_cap) {
   const std::size_t e8 = wordsFor64(cap), e4 = wordsFor32(cap);
   return std::max(2 * e8 + e4,
-                  3 * e4 + wordsFor32(slot_count) + wordsFor32(std::size_t(cell_cap) + 1));
+                  3 * e4 + 3 * wordsFor32(slot_count) + wordsFor32(std::size_t(cell_cap) + 1));
 }
 
 /// Copies one part's vertices to the device. From staging::kPinMinBytes up (unless
@@ -2274,6 +2314,7 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   // sort's bits.
   const bool count_build = async && countsOnRehash(m, nt);
   m.count_build = count_build;
+  if (count_build) m.group_axis = cellGroupAxis();
   if (count_build) ++ctx.profile.count_builds;
   gridKernel<<<1, 1, 0, s>>>(ctx.red.data(), dinfo, async ? (count_build ? 64 : m.sort_bits) : 0);
   checkLaunch();
@@ -2340,8 +2381,8 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
   const std::size_t e8 = wordsFor64(cap), e4 = wordsFor32(cap);
   if (count_build) {
     // The counting build (countFillKernel): its scratch in the same idle buffer, in 32-bit
-    // arrays: per entry its slot, rank and value; per slot its count, then its cell; per cell its
-    // count.
+    // arrays: per entry its slot, rank and value; per slot its three groups' counts (the first
+    // then holds its cell); per cell its count.
     const std::size_t s4 = wordsFor32(m.slot_count);
     ctx.cands.reserve(countBuildWords(cap, m.slot_count, cell_cap));
     std::uint32_t* const at = reinterpret_cast<std::uint32_t*>(ctx.cands.data());
@@ -2349,20 +2390,24 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     std::uint32_t* const ent_rank = at + 2 * e4;
     std::uint32_t* const ent_val = at + 4 * e4;
     std::uint32_t* const slot_cnt = at + 6 * e4;  // the slot's cell after countCellsKernel
-    std::uint32_t* const cell_count = slot_cnt + 2 * s4;
+    const std::size_t group_stride = 2 * s4;
+    std::uint32_t* const cell_count = slot_cnt + 3 * group_stride;
+    const int axis = m.group_axis;
     countClearKernel<<<std::min<unsigned int>(blocksFor(std::max<std::size_t>(m.slot_count,
                                                                                 cell_cap + 1ull),
                                                         kBuildBlock),
                                               static_cast<unsigned int>(8 * g_num_sms)),
-                       kBuildBlock, 0, s>>>(m.slots.data(), m.slot_count, slot_cnt, cell_count,
-                                            cell_cap + 1);
+                       kBuildBlock, 0, s>>>(m.slots.data(), m.slot_count, slot_cnt, group_stride,
+                                            cell_count, cell_cap + 1);
     checkLaunch();
     countFillKernel<S><<<eb, kBuildBlock, 0, s>>>(n, m.box.data(), m.level.data(), offsets,
                                                   dinfo, m.slots.data(), m.slot_count, slot_cnt,
-                                                  ent_slot, ent_rank, ent_val, cap, cell_cap);
+                                                  group_stride, axis, ent_slot, ent_rank, ent_val,
+                                                  cap, cell_cap);
     checkLaunch();
     countCellsKernel<<<blocksFor(m.slot_count, kBuildBlock), kBuildBlock, 0, s>>>(
-        dinfo, m.slots.data(), m.slot_count, slot_cnt, cell_count, m.cell_key.data(), cell_cap);
+        dinfo, m.slots.data(), m.slot_count, slot_cnt, group_stride, cell_count,
+        m.cell_split.data(), m.cell_key.data(), cell_cap);
     checkLaunch();
     cubCall(ctx, [&](void* tmp, std::size_t& bytes) {
       return cub::DeviceScan::ExclusiveSum(tmp, bytes, cell_count, m.cell_begin.data(),
@@ -2370,8 +2415,9 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     });
     scatterKernel<S><<<eb, kBuildBlock, 0, s>>>(cap, dinfo, ent_slot, ent_rank, ent_val,
                                                 slot_cnt, m.cell_begin.data(),
-                                                m.cell_key.data(), m.box.data(),
-                                                m.entry_tri.data(), m.entry_span.data(),
+                                                m.cell_split.data(), axis, m.cell_key.data(),
+                                                m.box.data(), m.entry_tri.data(),
+                                                m.entry_span.data(),
                                                 m.block_cell.data());
     checkLaunch();
   } else {
@@ -2466,6 +2512,7 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
       const std::size_t cells = std::size_t(hc[0]) + hc[1];
       m.cell_key.reserve(cells * m.key_words);
       m.cell_begin.reserve(cells + cells / 8 + 1, false);
+      m.cell_split.reserve(m.cell_begin.capacity(), false);
       m.cell_cap = static_cast<std::uint32_t>(
           std::min(m.cell_key.capacity() / m.key_words, m.cell_begin.capacity() - 1));
       // Linear probing: most lookups are misses (empty cells of the query's range), which scan to
@@ -2560,6 +2607,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
   const cudaStream_t s = ctx.stream;
   reserveRehash(ctx, m, nt);
   const std::uint32_t cap = rehashCap(m.entry_cap), cell_cap = rehashCap(m.cell_cap);
+  m.group_axis = cellGroupAxis();  // (a counting build's; the key holds it)
   const std::vector<std::uintptr_t> key = {
       nt, cap, cell_cap, m.slot_count, std::uintptr_t(m.sort_bits), std::uintptr_t(g_num_sms),
       std::uintptr_t(m.size_ordered), std::uintptr_t(countsOnRehash(m, nt)),
@@ -2572,6 +2620,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
       reinterpret_cast<std::uintptr_t>(m.entry_tri.data()),
       reinterpret_cast<std::uintptr_t>(m.entry_span.data()),
       reinterpret_cast<std::uintptr_t>(m.cell_begin.data()),
+      reinterpret_cast<std::uintptr_t>(m.cell_split.data()), std::uintptr_t(m.group_axis),
       reinterpret_cast<std::uintptr_t>(m.block_cell.data()),
       reinterpret_cast<std::uintptr_t>(m.cell_key.data()),
       reinterpret_cast<std::uintptr_t>(m.slots.data()),
@@ -4188,6 +4237,7 @@ void readEveryKnob() {
   (void)rehashCap(1);
   (void)rehashGraphOn();
   (void)countBuildOn(0);
+  (void)cellGroupAxis();
   (void)staging::pinVerticesOn();
   (void)commitCopyOn();
   (void)commitBatch();
@@ -4516,6 +4566,38 @@ std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh) {
   return {};
 }
 
+template <class S>
+CellLayout cellLayout(const HashedMesh<S>& mesh) {
+  Context& ctx = context();
+  std::lock_guard<std::mutex> lock(ctx.mutex);
+  CellLayout out;
+  for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
+    if (m.owner != &mesh || m.owner2 != nullptr || !m.valid || m.pending) continue;
+    BuildInfo info;
+    CUDA_TRY(cudaMemcpyAsync(&info, m.dinfo.data(), sizeof(BuildInfo), cudaMemcpyDeviceToHost,
+                             ctx.stream));
+    CUDA_TRY(cudaStreamSynchronize(ctx.stream));
+    if (info.need_sync || info.cells > m.cell_cap || info.entries > m.entry_cap) return out;
+    const std::size_t cells = info.cells, entries = info.entries;
+    out.cell_begin.resize(cells + 1);
+    out.entry_span.resize(entries);
+    std::vector<uint2> split(info.group_axis < kNoCellGroups ? cells : 0);
+    CUDA_TRY(cudaMemcpyAsync(out.cell_begin.data(), m.cell_begin.data(),
+                             (cells + 1) * sizeof(std::uint32_t), cudaMemcpyDeviceToHost,
+                             ctx.stream));
+    CUDA_TRY(cudaMemcpyAsync(out.entry_span.data(), m.entry_span.data(),
+                             entries * sizeof(std::uint32_t), cudaMemcpyDeviceToHost, ctx.stream));
+    if (!split.empty())
+      CUDA_TRY(cudaMemcpyAsync(split.data(), m.cell_split.data(), cells * sizeof(uint2),
+                               cudaMemcpyDeviceToHost, ctx.stream));
+    CUDA_TRY(cudaStreamSynchronize(ctx.stream));
+    out.axis = info.group_axis;
+    for (const uint2& g : split) out.split.emplace_back(g.x, g.y);
+    return out;
+  }
+  return out;
+}
+
 std::string deviceMemoryReport() {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
@@ -4534,7 +4616,7 @@ std::string deviceMemoryReport() {
       mesh[3] += m.diam.bytes();
       mesh[4] += m.level.bytes();
       mesh[5] += m.entry_tri.bytes() + m.entry_span.bytes() + m.block_cell.bytes();
-      mesh[6] += m.cell_begin.bytes();
+      mesh[6] += m.cell_begin.bytes() + m.cell_split.bytes();
       mesh[7] += m.cell_key.bytes();
       mesh[8] += m.slots.bytes();
       mesh[9] += m.dinfo.bytes();
@@ -4609,6 +4691,8 @@ template std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<do
                                                              const detail::HostPin&);
 template std::vector<std::uint16_t> upperLevels(const HashedMesh<float>&);
 template std::vector<std::uint16_t> upperLevels(const HashedMesh<double>&);
+template CellLayout cellLayout(const HashedMesh<float>&);
+template CellLayout cellLayout(const HashedMesh<double>&);
 
 }  // namespace cuda
 }  // namespace kdet_fcl

@@ -63,7 +63,11 @@
 // KDET_FCL_CUDA_UPPER_LEVELS=0|1 (read at every build) makes the builds never or always record,
 // per triangle, the levels above its own that hold a cell of its range, which self queries then
 // skip without a lookup (upperLevels(); by default recorded while the mesh's last self query
-// found at most 4 candidates per triangle). The pairs are put
+// found at most 4 candidates per triangle). A counting build lists each cell's entries in three
+// groups by where their sub-cell span lies on one axis (the cell's lower half, across its middle,
+// its upper half), and the warp-wide scans visit only the groups a query's span can meet
+// (cellLayout(); KDET_FCL_CUDA_CELL_GROUPS=0|1|2|3: none, x, y, z, default y; read at every
+// counting build). The pairs are put
 // in (a, b) order by counting them per segment of first indices as the exact tests emit them (a
 // scan, a scatter, a rank within each segment) when there are at least kCountOrderMinPairs and no
 // segment holds more than 1024 (KDET_FCL_CUDA_COUNT_ORDER_SEGMENT=n: n), else by the radix sort;
@@ -130,6 +134,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "commit_copy.h"
@@ -370,6 +375,23 @@ std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<S>& mesh, c
 /// build recorded nothing. For tests.
 template <class S>
 std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh);
+
+/// The cells of `mesh`'s last device build as the warp-wide scans see them, for tests: the axis
+/// on which the build grouped each cell's entries (0, 1, 2; 3: not grouped, as a sort build or
+/// KDET_FCL_CUDA_CELL_GROUPS=0 leaves them), each cell's first entry (cells + 1 values, the last
+/// the entries' count), each grouped cell's ends of its groups 0 and 1 as offsets from its first
+/// entry (empty when not grouped), and each entry's sub-cell span (detail::subcellSpan). On an
+/// axis a, an entry's group is 0 when its span's high slab (bits 15 + 5a..) is below 8, 2 when
+/// its low slab (bits 5a..) is 8 or more, else 1. Empty (axis 3, no cells) when the mesh is not
+/// cached on the device on its own or its build was not stored whole.
+struct CellLayout {
+  int axis = 3;
+  std::vector<std::uint32_t> cell_begin;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> split;
+  std::vector<std::uint32_t> entry_span;
+};
+template <class S>
+CellLayout cellLayout(const HashedMesh<S>& mesh);
 
 /// Reads every environment knob of the CUDA backend (KDET_FCL_CUDA_*, README.md) and throws
 /// InvalidInputError, naming the variable, its value and what it accepts, for a value it does

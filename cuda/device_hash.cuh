@@ -84,7 +84,25 @@ struct BuildInfo {
   int need_sync;   ///< re-hash without read-back only: the keys no longer fit the host's plan,
                    ///< or (counting build) its cells outgrew the table
   unsigned int inserted;  ///< counting build (countFillKernel): distinct cells inserted so far
+  /// The axis (0, 1, 2) on which this build grouped each cell's entries by their sub-cell spans
+  /// (cellGroupOf; HashView::cell_split gives the groups' bounds), or kNoCellGroups: the entries
+  /// of a cell are in no such order (the sort build, or the groups' knob off).
+  int group_axis;
 };
+
+/// BuildInfo::group_axis of a build whose cells are not grouped.
+constexpr int kNoCellGroups = 3;
+
+/// The group of an entry whose sub-cell span in its cell is `span` (detail::subcellSpan), on axis
+/// `axis`: 0 when its high slab lies in the cell's lower half (below 8 of the 16 sub-cells), 2
+/// when its low slab lies in the upper half, else 1 (it crosses the middle). A counting build
+/// with group_axis < kNoCellGroups lists each cell's entries by group, so that a query whose span
+/// lies in one half of the cell skips the other half's group in one contiguous run (their spans
+/// cannot overlap: cellGroupRun).
+__host__ __device__ __forceinline__ unsigned int cellGroupOf(std::uint32_t span, int axis) {
+  const unsigned int lo = (span >> (5 * axis)) & 15u, hi = (span >> (15 + 5 * axis)) & 15u;
+  return hi < 8 ? 0u : (lo >= 8 ? 2u : 1u);
+}
 
 /// The compact cell key: level and coordinates packed into cb bits per axis (exact and one-to-one
 /// when BuildInfo::fits64, for coordinates in [0, 2^cb), which every cell inside the bounds has).
@@ -130,6 +148,9 @@ struct HashView {
   /// Per entry: the sub-cell span of the triangle's box in the entry's cell (detail::subcellSpan).
   const std::uint32_t* entry_span;
   const std::uint32_t* cell_begin;  ///< first entry of each cell; cell_begin[cells] = entries
+  /// Per cell of a build with grouped cells (BuildInfo::group_axis < kNoCellGroups): the ends of
+  /// its groups 0 and 1 (cellGroupOf), as offsets from its first entry. Unread otherwise.
+  const uint2* cell_split;
   /// Full key of each cell: key_words = 1: the compact 64-bit key; 2: the 128-bit CellKey as
   /// {hi, lo}. Either way a lookup compares the whole key.
   const unsigned long long* cell_key;
@@ -522,6 +543,20 @@ __device__ __forceinline__ void startLevel(LookupCursor& c, const WarpQuery& q,
   c.L = info.top_level + 1;
 }
 
+/// Narrows a grouped cell's entries [begin, end) (BuildInfo::group_axis, cellGroupOf) to the run
+/// that a query of sub-cell span `qspan` in the cell must visit: with its span in the lower half
+/// on that axis (high slab below 8), groups 0 and 1; in the upper half (low slab 8 or more),
+/// groups 1 and 2; else all. The entries left out are those whose span lies wholly in the other
+/// half, so their spans miss the query's (subcellSpansOverlap would reject each of them), and so
+/// do their boxes (subcellSpan is monotone): the same candidates, fewer visits. The run can be
+/// empty (nextVisit then looks on to the lane's next cell).
+__device__ __forceinline__ void cellGroupRun(uint2 split, std::uint32_t qspan, int axis,
+                                             std::uint32_t& begin, std::uint32_t& end) {
+  const unsigned int q_lo = (qspan >> (5 * axis)) & 15u, q_hi = (qspan >> (15 + 5 * axis)) & 15u;
+  if (q_hi < 8) end = begin + split.y;
+  else if (q_lo >= 8) begin += split.x;
+}
+
 /// The lane's next visit: the entries [begin, begin + count) of the next occupied cell of its
 /// share of the lookups (the cells whose position in the query's walk over all its levels is
 /// `sub` modulo P, a power of two: the lane steps P positions at a time), or the next chunk of a
@@ -539,29 +574,36 @@ __device__ __forceinline__ std::uint32_t nextVisit(const HashView<S>& h, const B
     end = c.rest_end;
     ends = c.rest_ends;
   } else {
-    int cell = -1;
-    while (cell < 0 && c.L <= info.top_level) {
-      // The lane's position p in the level's walk (p < its cells: startLevel).
-      const std::uint32_t nz = static_cast<std::uint32_t>(c.n[2] + 1);
-      const std::uint32_t nyz = static_cast<std::uint32_t>(c.n[1] + 1) * nz;
-      const std::uint32_t dx = c.p / nyz, r = c.p - dx * nyz, dy = r / nz, dz = r - dy * nz;
-      cell = findCell(h, info, c.L, c.lo[0] + dx, c.lo[1] + dy, c.lo[2] + dz);
-      if (cell >= 0) {
-        ends = cellEnds(static_cast<int>(dx), static_cast<int>(dy), static_cast<int>(dz),
-                        c.n[0], c.n[1], c.n[2]);
-        if (kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
-        if (c.L > mine.size_level) ends |= kAboveQueryLevel;
+    // A found cell whose groups the query skips whole (cellGroupRun) leaves nothing to visit:
+    // the lane looks on for its next cell (an empty visit would read as the end of its
+    // lookups, and a warp whose live lanes all had one would stop early).
+    do {
+      int cell = -1;
+      while (cell < 0 && c.L <= info.top_level) {
+        // The lane's position p in the level's walk (p < its cells: startLevel).
+        const std::uint32_t nz = static_cast<std::uint32_t>(c.n[2] + 1);
+        const std::uint32_t nyz = static_cast<std::uint32_t>(c.n[1] + 1) * nz;
+        const std::uint32_t dx = c.p / nyz, r = c.p - dx * nyz, dy = r / nz, dz = r - dy * nz;
+        cell = findCell(h, info, c.L, c.lo[0] + dx, c.lo[1] + dy, c.lo[2] + dz);
+        if (cell >= 0) {
+          ends = cellEnds(static_cast<int>(dx), static_cast<int>(dy), static_cast<int>(dz),
+                          c.n[0], c.n[1], c.n[2]);
+          if (kSpans) qspan = detail::subcellSpanInCell(c.corners, ends);
+          if (c.L > mine.size_level) ends |= kAboveQueryLevel;
+        }
+        c.p += P;
+        const std::uint32_t cells = rangeCells(c);
+        if (c.p >= cells) {
+          c.p -= cells;
+          startLevel<kSpans>(c, mine, info, fixed, c.L + 1);
+        }
       }
-      c.p += P;
-      const std::uint32_t cells = rangeCells(c);
-      if (c.p >= cells) {
-        c.p -= cells;
-        startLevel<kSpans>(c, mine, info, fixed, c.L + 1);
-      }
-    }
-    if (cell < 0) return 0;
-    begin = __ldg(h.cell_begin + cell);
-    end = __ldg(h.cell_begin + cell + 1);
+      if (cell < 0) return 0;
+      begin = __ldg(h.cell_begin + cell);
+      end = __ldg(h.cell_begin + cell + 1);
+      if (kSpans && info.group_axis < kNoCellGroups)
+        cellGroupRun(__ldg(h.cell_split + cell), qspan, info.group_axis, begin, end);
+    } while (begin == end);
   }
   const std::uint32_t count = end - begin < max_visit ? end - begin : max_visit;
   c.rest_begin = begin + count;

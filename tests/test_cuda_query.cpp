@@ -399,6 +399,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
       {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_BUILD", on_off, not_on_off},
       {"KDET_FCL_CUDA_COUNT_BUILD_MAX", {"0", "150000", "4294967295"}, {"-1", "4294967296", "1e5"}},
+      {"KDET_FCL_CUDA_CELL_GROUPS", {"0", "1", "2", "3"}, {"4", "-1", "y"}},
       {"KDET_FCL_CUDA_PIN_VERTICES", on_off, not_on_off},
       {"KDET_FCL_CUDA_COMMIT_COPY", on_off, not_on_off},
       {"KDET_FCL_CUDA_COMMIT_BATCH", {"4096", "262144", "1073741824"}, {"4095", "1073741825", "1M"}},
@@ -3093,6 +3094,187 @@ TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
     }
   }
   unsetenv("KDET_FCL_CUDA_REHASH_GRAPH");
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, CountingBuildsGroupEachCellsEntriesByHalvesWithTheSameCandidates) {
+  // A counting build lists each cell's entries in three groups on one axis
+  // (KDET_FCL_CUDA_CELL_GROUPS: 1, 2, 3 = x, y, z; unset: y; 0: none): those whose sub-cell
+  // span lies in the cell's lower half, those that cross the middle, those in the upper half;
+  // the warp-wide scans then visit only the run a query's half can meet. The layout must be
+  // exactly that (every entry in its group's range, the groups' ends recorded), both extreme
+  // groups must occur (a crowded soup fills them), and the candidates and pairs must be the
+  // same on every axis and without groups, and the CPU's: self queries (with and without the
+  // cells' pairs), inter queries both ways and the joint query.
+  KDET_SKIP_WITHOUT_DEVICE();
+  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no counting build)";
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");
+  kdet_test::ScopedEnv warp("KDET_FCL_CUDA_SCAN", "warp");
+  kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "1");
+  cuda::setProfiling(true);
+  HashedMesh<S> crowded(makeRandomSoup<S>(4000, S(0.3), S(0.05), S(0.3), 7));
+  HashedMesh<S> sizes(makeRandomSoup<S>(4001, 1, S(1e-3), S(0.2), 9));
+  HashedMesh<S> cloth(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.7)));
+  HashedMesh<S> next(makeDrapedCloth<S>(60, 4, 1, S(0.03), S(0.75)));
+  HashedMesh<S> sphere(makeSphere<S>({0, 0, 0}, 1, 32, 16));
+  const std::pair<const char*, HashedMesh<S>*> selfs[] = {
+      {"crowded soup", &crowded}, {"soup of sizes", &sizes}, {"cloth", &cloth}};
+  struct Run {
+    std::vector<TrianglePair> pairs;
+    std::size_t candidates = 0;
+    int count_builds = 0;
+  };
+  auto self = [](const HashedMesh<S>& m) {
+    cuda::markDeformed(m);
+    Run r;
+    r.pairs = intersectSelf(m, on(Backend::Cuda)).pairs;
+    r.candidates = cuda::lastQueryProfile().candidates;
+    r.count_builds = cuda::lastQueryProfile().count_builds;
+    return r;
+  };
+  for (const auto& [what, m] : selfs) self(*m);  // first builds, with read-backs (the sort)
+  intersectMeshes(cloth, sphere, on(Backend::Cuda));  // (the sphere's and next's first builds)
+  intersectMeshes(next, sphere, on(Backend::Cuda));
+  std::size_t low = 0, high = 0;  // entries seen in groups 0 and 2
+  std::map<std::string, Run> base;
+  for (const char* groups : std::initializer_list<const char*>{"0", nullptr, "1", "3"}) {
+    kdet_test::ScopedEnv env("KDET_FCL_CUDA_CELL_GROUPS", groups);
+    const std::string g = groups ? groups : "unset";
+    for (const auto& [what, m] : selfs) {
+      for (const char* cells : {"0", "1"}) {
+        kdet_test::ScopedEnv cells_env("KDET_FCL_CUDA_SELF_CELLS", cells);
+        const std::string w = std::string(what) + ", groups " + g + ", self cells " + cells;
+        const Run r = self(*m);
+        EXPECT_EQ(r.count_builds, 1) << w;
+        EXPECT_EQ(r.pairs, sorted(intersectSelf(*m).pairs)) << w;
+        const std::string key = std::string(what) + cells;
+        if (!base.count(key)) base[key] = r;
+        EXPECT_EQ(r.candidates, base[key].candidates) << w << ": as without groups";
+      }
+      const cuda::CellLayout l = cuda::cellLayout(*m);
+      const int axis = groups == nullptr ? 1 : (groups[0] == '0' ? 3 : groups[0] - '1');
+      ASSERT_EQ(l.axis, axis) << what << ", groups " << g;
+      ASSERT_FALSE(l.cell_begin.empty()) << what;
+      const std::size_t cells = l.cell_begin.size() - 1;
+      ASSERT_EQ(l.entry_span.size(), l.cell_begin.back()) << what;
+      if (axis == 3) {
+        EXPECT_TRUE(l.split.empty()) << what;
+        continue;
+      }
+      ASSERT_EQ(l.split.size(), cells) << what;
+      std::size_t wrong = 0;
+      for (std::size_t c = 0; c < cells; ++c) {
+        const std::uint32_t b = l.cell_begin[c], e = l.cell_begin[c + 1];
+        const auto [end0, end1] = l.split[c];
+        ASSERT_LE(end0, end1) << what << ", cell " << c;
+        ASSERT_LE(b + end1, e) << what << ", cell " << c;
+        for (std::uint32_t k = b; k < e; ++k) {
+          const std::uint32_t span = l.entry_span[k];
+          const unsigned lo = (span >> (5 * axis)) & 15u, hi = (span >> (15 + 5 * axis)) & 15u;
+          const unsigned group = hi < 8 ? 0u : (lo >= 8 ? 2u : 1u);
+          const unsigned at = k < b + end0 ? 0u : (k < b + end1 ? 1u : 2u);
+          wrong += group != at;
+          low += group == 0;
+          high += group == 2;
+        }
+      }
+      EXPECT_EQ(wrong, 0u) << what << ", groups " << g << ": entries outside their group";
+    }
+    // Inter queries both ways, and the joint query of two meshes hashed as one.
+    cuda::markDeformed(cloth);
+    cuda::markDeformed(sphere);
+    EXPECT_EQ(intersectMeshes(cloth, sphere, on(Backend::Cuda)).pairs,
+              sorted(intersectMeshes(cloth, sphere).pairs)) << "groups " << g;
+    EXPECT_EQ(cuda::lastQueryProfile().count_builds, 2) << "groups " << g;
+    cuda::markDeformed(crowded);
+    cuda::markDeformed(sizes);
+    EXPECT_EQ(intersectMeshes(sizes, crowded, on(Backend::Cuda)).pairs,
+              sorted(intersectMeshes(sizes, crowded).pairs)) << "groups " << g;
+    cuda::markDeformed(cloth);
+    cuda::markDeformed(next);
+    const AllPairsResult all = intersectAll(cloth, next, on(Backend::Cuda));
+    EXPECT_TRUE(cuda::lastQueryProfile().joint) << "groups " << g;
+    EXPECT_EQ(all.self_a.pairs, sorted(intersectSelf(cloth).pairs)) << "groups " << g;
+    EXPECT_EQ(all.self_b.pairs, sorted(intersectSelf(next).pairs)) << "groups " << g;
+    EXPECT_EQ(all.inter.pairs, sorted(intersectMeshes(cloth, next).pairs)) << "groups " << g;
+  }
+  EXPECT_GT(low, 1000u);
+  EXPECT_GT(high, 1000u);
+  cuda::setProfiling(false);
+#endif
+}
+
+TYPED_TEST(CudaQueryTyped, AWarpScanLooksOnPastACellWhoseGroupsItSkipsWhole) {
+  // A found cell whose groups a query skips whole (KDET_FCL_CUDA_CELL_GROUPS) leaves its lane
+  // nothing to visit there; the lane must look on to its next cell. Taking the empty visit for
+  // the end of its lookups stopped a warp whose live lanes all had one, and lost the candidates
+  // of their later cells (session 45: 3 pairs of kdet_bench's unc-n-body-pair). Here A's
+  // level-0 cells are 0.3125 wide from the origin: cell (0, 0, 0) holds only
+  // triangles in its lower half on y, cell (1, 0, 0) only T; B's one triangle q lies at y = 0.25
+  // (the upper half), crosses both cells on x (the first is its walk's first) and cuts T, which
+  // is larger (so only q's lookups in A's hash can find the pair). With one lane per query the
+  // warp's only live lane meets the skipped cell first.
+  KDET_SKIP_WITHOUT_DEVICE();
+  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no counting build)";
+#if KDET_FCL_TEST_HAVE_CUDA
+  using S = TypeParam;
+  kdet_test::ScopedEnv warp("KDET_FCL_CUDA_SCAN", "warp");
+  kdet_test::ScopedEnv count("KDET_FCL_CUDA_COUNT_BUILD", "1");
+  kdet_test::ScopedEnv groups("KDET_FCL_CUDA_CELL_GROUPS", "2");  // y
+  TriangleMesh<S> am, bm;
+  // Right triangles of legs 0.25 and 0.1875 (diameter 0.3125, the hypotenuse), exact in float.
+  for (S y : {S(0), S(0.03125), S(0.0625), S(0.09375)})
+    am.addTriangle({0, y, 0}, {S(0.25), y, 0}, {0, y, S(0.1875)});
+  const std::uint32_t t = 4;  // T, upright in x = 0.5
+  am.addTriangle({S(0.5), S(0.03125), S(0.015625)}, {S(0.5), S(0.28125), S(0.015625)},
+                 {S(0.5), S(0.03125), S(0.203125)});
+  // q: legs 0.28125 and 0.125 (diameter 0.3078, level 0 of A's grid, smaller than T).
+  bm.addTriangle({S(0.25), S(0.25), S(0.03125)}, {S(0.53125), S(0.25), S(0.03125)},
+                 {S(0.25), S(0.25), S(0.15625)});
+  HashedMesh<S> a(std::move(am)), b(std::move(bm));
+  // The scene is as described (the CPU's grid is the device's).
+  const auto& ha = a.hash();
+  const detail::GridParams& g = ha.grid;
+  ASSERT_EQ(g.cell0, 0.3125);
+  const double dq = b.hash().diameter[0];
+  ASSERT_LT(dq, ha.diameter[t]);
+  ASSERT_EQ(detail::levelFor(dq, g), 0);
+  const detail::Aabb<double> qbox = detail::intersectBoxes(b.localBounds(), a.localBounds());
+  const detail::CellRange rq = detail::cellRange(qbox, 0, g);
+  ASSERT_EQ(rq.lo[0], 0);
+  ASSERT_EQ(rq.hi[0], 1);
+  for (int axis : {1, 2}) ASSERT_EQ(rq.lo[axis], rq.hi[axis]);
+  const auto yLo = [](std::uint32_t span) { return (span >> 5) & 15u; };
+  const auto yHi = [](std::uint32_t span) { return (span >> 20) & 15u; };
+  ASSERT_GE(yLo(detail::subcellSpan(qbox, 0, 0, rq.lo[1], rq.lo[2], g)), 8u);  // upper half
+  for (std::uint32_t i = 0; i <= t; ++i) {
+    ASSERT_EQ(ha.level[i], 0) << i;
+    const Triangle& tri = a.mesh().triangles[i];
+    const auto& v = a.mesh().vertices;
+    const auto box = detail::triangleBox<double>(v[tri[0]], v[tri[1]], v[tri[2]]);
+    const detail::CellRange r = detail::cellRange(box, 0, g);
+    const std::int64_t x = i == t ? 1 : 0;
+    ASSERT_TRUE(r.lo[0] == x && r.hi[0] == x && r.lo[1] == rq.lo[1] && r.hi[1] == rq.lo[1] &&
+                r.lo[2] == rq.lo[2] && r.hi[2] == rq.lo[2])
+        << "triangle " << i << " is not in cell (" << x << ", 0, 0) alone";
+    if (i != t) ASSERT_LT(yHi(detail::subcellSpan(box, 0, 0, rq.lo[1], rq.lo[2], g)), 8u) << i;
+  }
+  const auto cpu = sorted(intersectMeshes(a, b).pairs);
+  ASSERT_EQ(cpu, (std::vector<TrianglePair>{{t, 0}}));
+  intersectMeshes(a, b, on(Backend::Cuda));  // the first builds (with read-backs: the sort)
+  cuda::setProfiling(true);
+  for (const char* lanes : {"1", "2", "8", "32"}) {
+    kdet_test::ScopedEnv lanes_env("KDET_FCL_CUDA_WARP_LANES", lanes);
+    cuda::markDeformed(a);  // a re-hash without read-back: the counting build, grouped on y
+    EXPECT_EQ(intersectMeshes(a, b, on(Backend::Cuda)).pairs, cpu) << lanes << " lanes";
+    EXPECT_EQ(cuda::lastQueryProfile().count_builds, 1) << lanes << " lanes";
+    EXPECT_EQ(cuda::cellLayout(a).axis, 1) << lanes << " lanes";
+  }
   cuda::setProfiling(false);
 #endif
 }

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Prepared for the next session, NOT RUN in session 45 (no device time left). Device script
+# Prepared in session 45 (no device time left), run in session 46 (call 1). Device script
 # (carry .fcl-debs/root and .gpu-data): does kdet_bench's unc-n-body-pair disagreement of call 5
 # come from the cells' groups (groups.diff) or from the tree without them?
 #   1. kdet_bench's GPU table of the UNC n-body scenes (the anim scene first, then the pair, as in
@@ -8,7 +8,7 @@
 #   2. groups.diff applied to the device's copy, rebuilt, the same three runs with the groups (y)
 #      and three with KDET_FCL_CUDA_CELL_GROUPS=0;
 #   3. the whole table of call 5 (UNC and cloth scenes) once in each build.
-# kdet_bench exits 1 on a disagreement; each run's table and log go to $OUT.
+# kdet_bench exits 1 on a disagreement; each run's table and log go to $OUT/runs.tgz.
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
 ab_configure /tmp/next
@@ -20,7 +20,10 @@ bench() {  # bench NAME ONLY [ENV...]
     --out $W/$name > $W/$name.log 2>&1
   echo "kdet_bench $name rc=$? $(date +%T)" >> $T
   grep -h "DISAGREEMENT" $W/$name.log >> $T
-  cp $W/$name/bench.md $OUT/$name.md 2>/dev/null
+  mkdir -p $W/md
+  cp $W/$name/bench.md $W/md/$name.md 2>/dev/null
+  cp $W/$name.log $W/md/$name.log
+  tar czf $OUT/runs.tgz -C $W md  # each run's table and log (at most 8 files come back)
 }
 cmake --build build-gpu --parallel 16 --target kdet_bench >> $W/build.log 2>&1
 echo "build (tree) rc=$? $(date +%T)" >> $T
