@@ -7,6 +7,7 @@
 #   ab_probe FORMS SCENES...   the probe over FORMS, profiling off, then on (WORK/probe-*.txt)
 #   ab_configure WORK          the machine into $T and configure build-gpu (ab_build's first step)
 #   ab_wait                    waits for ab_build's background targets
+#   ab_targets TARGETS...      builds TARGETS in build-gpu (log $W/build.log, rc into $T)
 #   ab_ncu KNOB VALUE FILE     ncu's kernel durations (phase 1's and the counting build's kernels,
 #                              no clock control) of gpu_bench's cloth ball under KNOB=VALUE, as
 #                              CSV into FILE (session 45)
@@ -16,6 +17,11 @@
 #                              with the CUDA tests' and gpu_bench's targets, ctest -L cuda, the
 #                              sanitizers and gpu_bench on the cloth ball ($OUT/check,
 #                              $OUT/gpu_check.log; session 44's call 3, session 45's call 4)
+#   ab_table                   kdet_bench's GPU table of the UNC and cloth scenes (1M included,
+#                              the LBVH in the same process) into $W/bench and $W/bench.log,
+#                              its disagreements (and, from session 46, UNSTEADY lines) into $T,
+#                              gpu_table.py's table into $OUT/table.md (session 45's call 5,
+#                              session 46's calls 3 and 5)
 #   ab_finish                  the probes' outputs and the logs (out.tgz) into $OUT
 set -u
 T=$OUT/times.txt
@@ -64,6 +70,11 @@ ab_probe() {
 
 ab_wait() { wait $AB_BG; }
 
+ab_targets() {
+  cmake --build build-gpu --parallel 16 --target "$@" >> $W/build.log 2>&1
+  echo "build rc=$? $(date +%T)" >> $T
+}
+
 ab_ball() {
   local knob=$1 runs=$2 name=${1#KDET_FCL_CUDA_}
   shift 2
@@ -100,6 +111,15 @@ ab_check() {
   echo "gpu_check rc=$? $(date +%T)" >> $T
   gzip -f $OUT/check/ctest.log $OUT/check/build.log 2>/dev/null
   date >> $T
+}
+
+ab_table() {
+  timeout 130 build-gpu/benchmarks/kdet_bench --reps 5 --frames 5 --rep-budget 5 --no-kfree \
+    --no-plots --methods 'kdet_gpu$,gpu_bvh$' --include-1m --only unc,cloth --out $W/bench \
+    > $W/bench.log 2>&1
+  echo "kdet_bench rc=$? $(date +%T)" >> $T
+  grep -h "DISAGREEMENT \*\*\*\|UNSTEADY" $W/bench.log >> $T
+  python3 benchmarks/results/gpu-h100-session37/gpu_table.py $W/bench/bench.json > $OUT/table.md 2>&1
 }
 
 ab_finish() {

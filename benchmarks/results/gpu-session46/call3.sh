@@ -8,19 +8,13 @@
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
 ab_configure /tmp/s46c3
-cmake --build build-gpu --parallel 16 --target test_cuda_query kdet_bench >> $W/build.log 2>&1
-echo "build rc=$? $(date +%T)" >> $T
+ab_targets test_cuda_query kdet_bench
 F='*AWarpScanLooksOnPast*:*CountingBuildsGroupEachCellsEntries*'
 build-gpu/tests/test_cuda_query --gtest_filter="$F" > $W/test-fixed.txt 2>&1
 echo "tests (fixed) rc=$? $(date +%T)" >> $T
 grep -E "^\[  (PASSED|FAILED) |^\[       OK|^\[  FAILED" $W/test-fixed.txt >> $T
-timeout 130 build-gpu/benchmarks/kdet_bench --reps 5 --frames 5 --rep-budget 5 --no-kfree \
-  --no-plots --methods 'kdet_gpu$,gpu_bvh$' --include-1m --only unc,cloth --out $W/bench \
-  > $W/bench.log 2>&1
-echo "kdet_bench rc=$? $(date +%T)" >> $T
-grep -h "DISAGREEMENT \*\*\*" $W/bench.log >> $T
+ab_table
 cp $W/bench/bench.md $OUT/bench.md
-python3 benchmarks/results/gpu-h100-session37/gpu_table.py $W/bench/bench.json > $OUT/table.md 2>&1
 git apply -R benchmarks/results/gpu-session46/fix.diff >> $T 2>&1
 echo "fix.diff taken back rc=$? $(date +%T)" >> $T
 cmake --build build-gpu --parallel 16 --target test_cuda_query >> $W/build.log 2>&1
