@@ -119,7 +119,8 @@ ab_table() {
     > $W/bench.log 2>&1
   echo "kdet_bench rc=$? $(date +%T)" >> $T
   grep -h "DISAGREEMENT \*\*\*\|UNSTEADY" $W/bench.log >> $T
-  python3 benchmarks/results/gpu-h100-session37/gpu_table.py $W/bench/bench.json > $OUT/table.md 2>&1
+  python3 benchmarks/results/gpu-h100-session37/gpu_table.py $W/bench/bench.json \
+    > $OUT/table.md 2>&1
 }
 
 ab_finish() {
