@@ -1892,6 +1892,11 @@ template <class S>
 struct CachedMesh {
   const void* owner = nullptr;
   const void* owner2 = nullptr;  // the second mesh of two hashed as one (else nullptr)
+  // The owners' HashedMesh::identity() (0: no second mesh) whose queries set the forecasts below,
+  // and this entry's tenure: a number unique in the process, drawn whenever the entry passes to
+  // other meshes (acquire: a new mesh at a freed owner's address), so that a partner's forecast
+  // names the meshes it was made for, not only the entry.
+  std::uint64_t identity = 0, identity2 = 0, tenure = 0;
   std::uint64_t version = 0, version2 = 0;
   std::uint64_t topology = 0, topology2 = 0;  // the meshes' topologyVersion() of the device's
                                               // triangles (with `valid`)
@@ -1932,17 +1937,19 @@ struct CachedMesh {
   BuildInfo info{};           // the host's copy (after a read-back; stale while pending)
   cudaGraphExec_t graph = nullptr;  // the re-hash without read-back (rehashFromGraph)
   std::vector<std::uintptr_t> graph_key;  // the sizes and buffers it was captured with
-  // Candidates per query triangle of the last self query of this mesh and of the last inter
-  // query it took part in (spansFor()).
+  // The forecasts, all of the owners' (identity, identity2) and dropped when the entry passes to
+  // other meshes (takeFor). Candidates per query triangle of the last self query of this
+  // mesh and of the last inter query it took part in (spansFor()).
   double self_density = 0, inter_density = 0;
   // Of the last self query's candidates, the share that the cells' pairs gave (runQuery's
   // stages).
   double self_cell_share = 0;
   // runQuery's forecasts: the pairs the last self query of this entry (two meshes hashed as one
-  // included) delivered into a host result, and those of its last inter query with the entry
-  // `inter_partner` as its second mesh (another partner starts without one).
+  // included) delivered into a host result, and those of its last inter query with the entry of
+  // tenure `inter_partner` as its second mesh (another partner, or the same entry passed to
+  // other meshes, starts without one; 0: none).
   std::size_t self_host_pairs = 0, inter_host_pairs = 0;
-  const void* inter_partner = nullptr;
+  std::uint64_t inter_partner = 0;
   // `builds` counts the geometries this entry has held (rebuild()): the geometry of the kept
   // self result (detail::KeptSelfResult's rule: a rigid mesh's self query runs on the device
   // twice, then never again; a mesh with new geometry at every self query never keeps one).
@@ -1957,6 +1964,19 @@ struct CachedMesh {
     if (graph != nullptr) (void)cudaGraphExecDestroy(graph);
     graph = nullptr;
     graph_key.clear();
+  }
+  /// Makes the entry that of the meshes of identities (id, id2), with no forecast and a new
+  /// tenure, unless it is already theirs. (Their geometry is rebuilt anyway: a new mesh has a new
+  /// version.)
+  void takeFor(std::uint64_t id, std::uint64_t id2) {
+    static std::uint64_t next_tenure = 1;  // (under the context's mutex)
+    if (tenure != 0 && id == identity && id2 == identity2) return;
+    identity = id;
+    identity2 = id2;
+    tenure = next_tenure++;
+    self_density = inter_density = self_cell_share = 0;
+    self_host_pairs = inter_host_pairs = 0;
+    inter_partner = 0;
   }
 
   HashView<S> view() const {
@@ -2790,6 +2810,7 @@ CachedMesh<S>& acquire(Context& ctx, const HashedMesh<S>& hm, const HashedMesh<S
     list.front().owner2 = hm2;
   }
   CachedMesh<S>& m = list.front();
+  m.takeFor(hm.identity(), hm2 ? hm2->identity() : 0);
   const bool same_ids = m.version == hm.version() && m.version2 == v2 && m.fingerprint == fp;
   if (m.valid && !m.force_vertices && same_ids) return m;
   // markDeformed() with unchanged versions: only the vertices can have moved. So too after
@@ -3071,6 +3092,8 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
                      QueryResult* parts = nullptr, DeviceOut* dev = nullptr,
                      std::vector<TrianglePair>* keep = nullptr) {
   const cudaStream_t s = ctx.stream;
+  ctx.profile.density_forecast = density;
+  ctx.profile.pairs_forecast = forecast != nullptr ? *forecast : 0;
   // The candidates' layout (PairSink::key_bytes; packedCandidates): their keys carry b_bits for
   // b, or 32 in 8 bytes.
   const int packing = packedCandidates();
@@ -3990,8 +4013,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   };
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
                            {sourceOf(&a), sourceOf(&b)}};
-  if (A.inter_partner != static_cast<const void*>(&B)) {
-    A.inter_partner = &B;
+  if (A.inter_partner != B.tenure) {
+    A.inter_partner = B.tenure;
     A.inter_host_pairs = 0;
   }
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,
@@ -4552,7 +4575,8 @@ std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh) {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
-    if (m.owner != &mesh || m.owner2 != nullptr || !m.valid || m.pending || !m.upper_ready)
+    if (m.owner != &mesh || m.owner2 != nullptr || m.identity != mesh.identity() || !m.valid ||
+        m.pending || !m.upper_ready)
       continue;
     std::vector<std::uint32_t> words(upperWords(m.nt));
     CUDA_TRY(cudaMemcpyAsync(words.data(), m.upper.data(), words.size() * sizeof(std::uint32_t),
@@ -4572,7 +4596,9 @@ CellLayout cellLayout(const HashedMesh<S>& mesh) {
   std::lock_guard<std::mutex> lock(ctx.mutex);
   CellLayout out;
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
-    if (m.owner != &mesh || m.owner2 != nullptr || !m.valid || m.pending) continue;
+    if (m.owner != &mesh || m.owner2 != nullptr || m.identity != mesh.identity() || !m.valid ||
+        m.pending)
+      continue;
     BuildInfo info;
     CUDA_TRY(cudaMemcpyAsync(&info, m.dinfo.data(), sizeof(BuildInfo), cudaMemcpyDeviceToHost,
                              ctx.stream));

@@ -269,6 +269,15 @@ struct QueryProfile {
                                 ///< updateVertices had copied the positions to the device as
                                 ///< it passed over them (startCommitCopy,
                                 ///< KDET_FCL_CUDA_COMMIT_COPY)
+  double density_forecast = 0;  ///< the candidates per query triangle forecast for this query:
+                                ///< those of the last query of its kind on the same meshes (a
+                                ///< self query's, or the largest of the two meshes' last inter
+                                ///< queries'), 0 for the first; it steers the lanes, the spans,
+                                ///< the cells' rows and the rounds, never the pairs. A new mesh
+                                ///< at a freed mesh's address starts at 0 (HashedMesh::identity)
+  std::size_t pairs_forecast = 0;  ///< the pairs the query's last host result of its kind on the
+                                   ///< same meshes (an inter query: the same second mesh) held,
+                                   ///< which sizes an early read-back (forecast_copy); 0: none
   bool spans = false;  ///< the candidate search tested sub-cell spans (KDET_FCL_CUDA_SPANS)
   bool warp_scan = false;  ///< the candidate search ran the warp-wide scan (KDET_FCL_CUDA_SCAN)
   int warp_lanes = 0;      ///< its lanes per query triangle (KDET_FCL_CUDA_WARP_LANES; 0: tile)
@@ -371,8 +380,9 @@ std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<S>& mesh, c
 /// (levels above own + 15 are not recorded and always scanned). A self query scans only the
 /// levels so marked, with no lookup on the others. Builds record them while the mesh's last self
 /// query found at most 4 candidates per triangle (KDET_FCL_CUDA_UPPER_LEVELS=0|1: never, always;
-/// read at every build). Empty when the mesh is not cached on the device on its own, or its last
-/// build recorded nothing. For tests.
+/// read at every build). Empty when the mesh is not cached on the device on its own (an entry
+/// another mesh left at its address counts as none), or its last build recorded nothing. For
+/// tests.
 template <class S>
 std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh);
 
@@ -383,7 +393,7 @@ std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh);
 /// entry (empty when not grouped), and each entry's sub-cell span (detail::subcellSpan). On an
 /// axis a, an entry's group is 0 when its span's high slab (bits 15 + 5a..) is below 8, 2 when
 /// its low slab (bits 5a..) is 8 or more, else 1. Empty (axis 3, no cells) when the mesh is not
-/// cached on the device on its own or its build was not stored whole.
+/// cached on the device on its own (as upperLevels) or its build was not stored whole.
 struct CellLayout {
   int axis = 3;
   std::vector<std::uint32_t> cell_begin;

@@ -359,6 +359,9 @@ HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int th
   hash_ = std::make_unique<detail::HierarchicalHash<S>>();
   lazy_ = std::make_unique<Lazy>();
   kept_self_ = std::make_unique<detail::KeptSelfResult>("KDET_FCL_CPU_SELF_CACHE");
+  // Unique in the process, as versions are: a new mesh at a freed mesh's address gets a new one.
+  static std::atomic<std::uint64_t> next_identity{1};
+  identity_ = next_identity.fetch_add(1);
   topologyChanged();
   geometryChanged();
 }

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <random>
 #include <thread>
 #include <utility>
@@ -475,6 +476,38 @@ TEST(HashedMesh, TopologyVersionChangesWithTheTrianglesOnly) {
   EXPECT_EQ(c.topologyVersion(), t1);
   b = std::move(c);
   EXPECT_EQ(b.topologyVersion(), t1);
+}
+
+TEST(HashedMesh, IdentityIsTheObjectsFromConstructionAndMovesWithTheMesh) {
+  const TriangleMesh<double> sphere = makeSphere<double>({0, 0, 0}, 1, 12, 6);
+  std::optional<HashedMesh<double>> a;
+  a.emplace(sphere);
+  HashedMesh<double> b(sphere);
+  const auto id = a->identity();
+  EXPECT_NE(id, 0u);
+  EXPECT_NE(id, b.identity());
+  std::vector<Vec3<double>> moved = sphere.vertices;
+  for (auto& p : moved) p.x += 0.5;
+  a->updateVertices(moved);
+  Transform<double> shifted;
+  shifted.t = {1, 2, 3};
+  a->setPose(shifted);
+  a->setMesh(makeSphere<double>({0, 0, 0}, 1, 8, 4));
+  Vec3<double>* w = a->vertexWriteBuffer();
+  for (std::size_t k = 0; k < a->numVertices(); ++k) w[k] = a->mesh().vertices[k];
+  a->commitVertices();
+  EXPECT_EQ(a->identity(), id) << "every change of the mesh keeps its identity";
+  const void* at = &*a;
+  a.emplace(sphere);  // a new mesh at the freed mesh's address
+  ASSERT_EQ(static_cast<const void*>(&*a), at);
+  EXPECT_NE(a->identity(), id);
+  EXPECT_NE(a->identity(), b.identity());
+  const auto id_a = a->identity(), id_b = b.identity();
+  HashedMesh<double> c(std::move(*a));
+  EXPECT_EQ(c.identity(), id_a) << "moved with the mesh";
+  b = std::move(c);
+  EXPECT_EQ(b.identity(), id_a) << "moved with the mesh into another object";
+  EXPECT_NE(b.identity(), id_b);
 }
 
 // commitVertices: the positions written into vertexWriteBuffer() become the mesh's without a copy

@@ -119,6 +119,13 @@ class HashedMesh {
   /// the triangles after a deformation.
   std::uint64_t topologyVersion() const { return topology_version_; }
 
+  /// Identifies this HashedMesh object: drawn at construction, unique in the process (no two
+  /// constructed meshes ever share one), kept by setPose, updateVertices, commitVertices and
+  /// setMesh, and moved with the mesh (a move leaves the source's value as it was). A cache of
+  /// what one mesh's queries learned (the CUDA backend's forecasts) keyed by the mesh's address
+  /// checks it, so that a new mesh at a freed mesh's address starts afresh.
+  std::uint64_t identity() const { return identity_; }
+
   /// The CPU hierarchy's shape and memory. Builds the CPU hash if it is stale (like a query).
   HierarchyStats stats() const;
 
@@ -185,6 +192,7 @@ class HashedMesh {
   std::unique_ptr<detail::KeptSelfResult> kept_self_;
   std::uint64_t version_ = 0;
   std::uint64_t topology_version_ = 0;
+  std::uint64_t identity_ = 0;
   int threads_ = 0;
 };
 
