@@ -23,6 +23,13 @@
 #                              gpu_table.py's table into $OUT/table.md (session 45's call 5,
 #                              session 46's calls 3 and 5)
 #   ab_finish                  the probes' outputs and the logs (out.tgz) into $OUT
+#   ab_gtest NAME FILTER       test_cuda_query on FILTER into $W/test-NAME.txt, its rc and its
+#                              OK/FAILED lines into $T (sessions 46 and 47)
+#   ab_without DIFF NAME FILTER  DIFF applied (a fix taken back), test_cuda_query rebuilt and run
+#                              by ab_gtest (its failures' lines into $T too), DIFF taken back and
+#                              test_cuda_query rebuilt again, so that the machine's build-gpu does
+#                              not keep the library without the fix (session 47's call 2 met that
+#                              trap; its call 1 ran these steps without the last rebuild)
 set -u
 T=$OUT/times.txt
 D=$PWD/.fcl-debs/root
@@ -127,4 +134,20 @@ ab_finish() {
   date >> $T
   cp $W/probe-*.txt $OUT/
   tar czf $OUT/out.tgz -C $W --exclude=probe --exclude='*.csv' .
+}
+
+ab_gtest() {
+  build-gpu/tests/test_cuda_query --gtest_filter="$2" > $W/test-$1.txt 2>&1
+  echo "tests ($1) rc=$? $(date +%T)" >> $T
+  grep -E "^\[  (PASSED|FAILED) |^\[       OK|^\[  FAILED" $W/test-$1.txt >> $T
+}
+
+ab_without() {
+  git apply $1 >> $T 2>&1
+  echo "$1 applied rc=$? $(date +%T)" >> $T
+  ab_targets test_cuda_query
+  ab_gtest $2 "$3"
+  grep -E "Failure|Which is" $W/test-$2.txt | head -60 >> $T
+  git apply -R $1
+  ab_targets test_cuda_query
 }
