@@ -9,7 +9,7 @@
 # next_threads.diff: 256 KB a thread from 768 KB (4 threads at 1.1 MB; still none on hosts of
 # fewer than 3 threads, as CI's).
 #   A: the tree; B: the tree with next_threads.diff, built beside it from a copy in /tmp/b.
-#   1. update_bench --double (the 92k cloth: 1.1 MB), A B A B;
+#   1. update_bench --double (grid sides 215 and 300: 1.1 and 2.2 MB), A B A B;
 #   2. kdet_bench's GPU table on the cloth-ball scenes and the 90k cloth, A B five times.
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
