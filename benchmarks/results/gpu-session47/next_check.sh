@@ -30,14 +30,14 @@ echo "A build rc=$? $(date +%T)" >> $T
 wait
 # Each variant's binaries with its own library (LD_LIBRARY_PATH, which ab_common.sh points at
 # A's build-gpu, comes before a binary's own run path).
+tree_of() { if [ $1 = B ]; then echo /tmp/b; else echo $PWD; fi; }
 run_v() {
-  local d=$PWD
-  [ $1 = B ] && d=/tmp/b
+  local d=$(tree_of $1)
   shift
   env LD_LIBRARY_PATH=$L:$d/build-gpu timeout 60 $d/build-gpu/benchmarks/"$@"
 }
 for v in A B; do
-  d=$PWD; [ $v = B ] && d=/tmp/b
+  d=$(tree_of $v)
   env LD_LIBRARY_PATH=$L:$d/build-gpu ldd $d/build-gpu/benchmarks/kdet_bench | grep kdet_fcl \
     | sed "s/^/$v: /" >> $T
 done
