@@ -1892,11 +1892,10 @@ template <class S>
 struct CachedMesh {
   const void* owner = nullptr;
   const void* owner2 = nullptr;  // the second mesh of two hashed as one (else nullptr)
-  // The owners' HashedMesh::identity() (0: no second mesh) whose queries set the forecasts below,
-  // and this entry's tenure: a number unique in the process, drawn whenever the entry passes to
-  // other meshes (acquire: a new mesh at a freed owner's address), so that a partner's forecast
-  // names the meshes it was made for, not only the entry.
-  std::uint64_t identity = 0, identity2 = 0, tenure = 0;
+  // The owners' HashedMesh::identity() (0: none yet; identity2 0: no second mesh) whose queries
+  // set the forecasts below. A new mesh at a freed owner's address has another identity (acquire:
+  // takeFor), and a partner's forecast names the partner's identity, not its entry.
+  std::uint64_t identity = 0, identity2 = 0;
   std::uint64_t version = 0, version2 = 0;
   std::uint64_t topology = 0, topology2 = 0;  // the meshes' topologyVersion() of the device's
                                               // triangles (with `valid`)
@@ -1945,9 +1944,9 @@ struct CachedMesh {
   // stages).
   double self_cell_share = 0;
   // runQuery's forecasts: the pairs the last self query of this entry (two meshes hashed as one
-  // included) delivered into a host result, and those of its last inter query with the entry of
-  // tenure `inter_partner` as its second mesh (another partner, or the same entry passed to
-  // other meshes, starts without one; 0: none).
+  // included) delivered into a host result, and those of its last inter query with the mesh of
+  // identity `inter_partner` as its second mesh (another partner, or a new mesh at the partner's
+  // address, starts without one; 0: none).
   std::size_t self_host_pairs = 0, inter_host_pairs = 0;
   std::uint64_t inter_partner = 0;
   // `builds` counts the geometries this entry has held (rebuild()): the geometry of the kept
@@ -1965,15 +1964,12 @@ struct CachedMesh {
     graph = nullptr;
     graph_key.clear();
   }
-  /// Makes the entry that of the meshes of identities (id, id2), with no forecast and a new
-  /// tenure, unless it is already theirs. (Their geometry is rebuilt anyway: a new mesh has a new
-  /// version.)
+  /// Makes the entry that of the meshes of identities (id, id2), with no forecast, unless it is
+  /// already theirs. (Their geometry is rebuilt anyway: a new mesh has a new version.)
   void takeFor(std::uint64_t id, std::uint64_t id2) {
-    static std::uint64_t next_tenure = 1;  // (under the context's mutex)
-    if (tenure != 0 && id == identity && id2 == identity2) return;
+    if (id == identity && id2 == identity2) return;
     identity = id;
     identity2 = id2;
-    tenure = next_tenure++;
     self_density = inter_density = self_cell_share = 0;
     self_host_pairs = inter_host_pairs = 0;
     inter_partner = 0;
@@ -4013,8 +4009,8 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
   };
   PendingBuilds<S> pending{ctx, {&A, &B == &A ? nullptr : &B},
                            {sourceOf(&a), sourceOf(&b)}};
-  if (A.inter_partner != B.tenure) {
-    A.inter_partner = B.tenure;
+  if (A.inter_partner != B.identity) {
+    A.inter_partner = B.identity;
     A.inter_host_pairs = 0;
   }
   QueryResult res = runQuery(ctx, launch, pending, bitsFor(na), bitsFor(nb), na + nb,

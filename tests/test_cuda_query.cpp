@@ -2535,8 +2535,8 @@ TYPED_TEST(CudaQueryTyped, ANewMeshAtAFreedMeshsAddressStartsWithoutItsForecasts
   // the old entry over. It must start without those forecasts, as a mesh at a new address does,
   // while the same mesh keeps them through setPose, updateVertices and setMesh. Self queries,
   // inter queries (both meshes new; only the partner new, whose pairs forecast the old partner's
-  // entry held) and joint queries (intersectAll; the second mesh new). Every pair set is the
-  // CPU's.
+  // entry held; the same partner moved to another address and back, which keeps it) and joint
+  // queries (intersectAll; the second mesh new). Every pair set is the CPU's.
   KDET_SKIP_WITHOUT_DEVICE();
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
@@ -2606,6 +2606,17 @@ TYPED_TEST(CudaQueryTyped, ANewMeshAtAFreedMeshsAddressStartsWithoutItsForecasts
     EXPECT_EQ(p.pairs_forecast, 0u) << "the old partner's pairs";
     p = inter(*a, *b, "its second");
     EXPECT_GT(p.pairs_forecast, 0u);
+    {  // The partner moved to another address: the same mesh (its identity moves with it), so
+       // a keeps its pairs forecast, though the partner's own entry there is new.
+      std::optional<HashedMesh<S>> moved;
+      moved.emplace(std::move(*b));
+      ASSERT_NE(static_cast<const void*>(&*moved), static_cast<const void*>(&*b));
+      p = inter(*a, *moved, "the partner moved to another address");
+      EXPECT_GT(p.pairs_forecast, 0u) << "the moved partner's pairs";
+      b.emplace(std::move(*moved));  // back at its first address, to the entry it left there
+      p = inter(*a, *b, "the partner moved back");
+      EXPECT_GT(p.pairs_forecast, 0u) << "the moved partner's pairs";
+    }
     a.emplace(soupA());
     b.emplace(soupB());
     p = inter(*a, *b, "two new meshes at the old meshes' addresses");
