@@ -1933,6 +1933,9 @@ struct CachedMesh {
   bool size_ordered = true;
   bool pending = false;       // re-hashed without read-back: check the sizes at the query's
   std::uint32_t pending_entry_cap = 0, pending_cell_cap = 0;  // what that re-hash could store
+  // A re-hash without read-back found more entries or cells than its arrays held (checkPending):
+  // the build with read-backs after it leaves more room in both (withRoom, buildOnDevice).
+  bool outgrown = false;
   BuildInfo info{};           // the host's copy (after a read-back; stale while pending)
   cudaGraphExec_t graph = nullptr;  // the re-hash without read-back (rehashFromGraph)
   std::vector<std::uintptr_t> graph_key;  // the sizes and buffers it was captured with
@@ -2185,6 +2188,17 @@ inline std::size_t roundUp(std::size_t x, std::size_t a) { return (x + a - 1) / 
 
 /// KDET_FCL_CUDA_REHASH_CAP=k (tests): a re-hash without read-back uses at most k entries and k
 /// cells, so that it overflows and takes the fallback. 0 or unset: the arrays' capacities.
+/// The room a build with read-backs leaves in a mesh's entry and cell arrays after a re-hash
+/// without read-back outgrew them (CachedMesh::outgrown), as a share of what the build holds, on
+/// top of DeviceBuffer's 1/8: a mesh that outgrew its arrays by more than 1/8 in one frame is
+/// growing (kdet_bench's 90k cloth draping over its sphere: 10-20 % more cells every frame), and
+/// with 1/8 alone its next frames fell back again. Only such meshes pay the memory.
+constexpr std::size_t kOutgrownRoomDiv = 2;  // n / 2 more
+
+std::size_t withRoom(std::size_t n, bool outgrown) {
+  return outgrown ? n + n / kOutgrownRoomDiv : n;
+}
+
 std::uint32_t rehashCap(std::uint32_t cap) {
   const std::uint64_t k = detail::numberKnob("KDET_FCL_CUDA_REHASH_CAP", 0, 0xFFFFFFFFull, 0);
   return k > 0 && k < cap ? static_cast<std::uint32_t>(k) : cap;
@@ -2376,7 +2390,9 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
     // cellSpans) see it from the first query on, not only after a re-hash without read-back.
     m.info.entries = static_cast<unsigned int>(total);
     compact = m.info.fits64 != 0 && !fullKeys();
-    m.entry_tri.reserve(total);  // 1/8 slack: room for the next re-hash without read-back
+    // 1/8 slack: room for the next re-hash without read-back; more after the mesh outgrew its
+    // arrays (withRoom).
+    m.entry_tri.reserve(withRoom(total, m.outgrown));
     m.entry_span.reserve(m.entry_tri.capacity(), false);
     m.block_cell.reserve(m.entry_tri.capacity() / 32 + 1, false);
     m.entry_cap = static_cast<std::uint32_t>(std::min<std::size_t>(m.entry_tri.capacity(), 0xF0000000ull));
@@ -2525,7 +2541,8 @@ void buildOnDevice(Context& ctx, CachedMesh<S>& m, std::size_t nt, bool async) {
       CUDA_TRY(cudaMemcpyAsync(hc + 1, head + (cap - 1), sizeof(std::uint32_t),
                                cudaMemcpyDeviceToHost, s));
       CUDA_TRY(cudaStreamSynchronize(s));
-      const std::size_t cells = std::size_t(hc[0]) + hc[1];
+      const std::size_t cells = withRoom(std::size_t(hc[0]) + hc[1], m.outgrown);
+      m.outgrown = false;
       m.cell_key.reserve(cells * m.key_words);
       m.cell_begin.reserve(cells + cells / 8 + 1, false);
       m.cell_split.reserve(m.cell_begin.capacity(), false);
@@ -2780,6 +2797,11 @@ bool checkPending(Context& ctx, CachedMesh<S>& m, const MeshSource<S>& mesh,
   m.info = host;
   if (builtInCaps(m, host)) return false;
   ++ctx.profile.rehash_fallbacks;
+  // Too many entries, or too many cells (the counting build stops inserting at its cap, the
+  // sort build counts them all): the mesh is growing, so its next arrays get more room.
+  m.outgrown = host.entries > m.pending_entry_cap || host.cells > m.pending_cell_cap ||
+               host.inserted >= m.pending_cell_cap;
+  ctx.profile.rehash_outgrown += m.outgrown ? 1 : 0;
   rebuild(ctx, m, mesh, false, false);
   return true;
 }

@@ -255,6 +255,8 @@ struct QueryProfile {
   int builds_with_readback = 0; ///< builds that read the sizes back (first build, new topology,
                                 ///< 128-bit keys, KDET_FCL_CUDA_SYNC_REHASH=1, or a fallback)
   int rehash_fallbacks = 0;     ///< re-hashes that did not fit and were rebuilt (query rerun)
+  int rehash_outgrown = 0;      ///< of them, those whose entries or cells outgrew the arrays:
+                                ///< their rebuild left half as much again of room in both
   int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
   int count_builds = 0;         ///< of the re-hashes without read-back, those that grouped their
                                 ///< entries by counting in the cell table, not by a sort

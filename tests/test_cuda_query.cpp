@@ -3174,6 +3174,50 @@ TEST(CudaQuery, RehashWithoutReadBackAndItsFallbacks) {
 #endif
 }
 
+TEST(CudaQuery, AMeshThatOutgrowsItsHashGetsRoomForItsNextFrames) {
+  // A re-hash without read-back has the arrays of the last build with read-backs, with 1/8 of
+  // slack. A mesh that outgrows them falls back to a build with read-backs, and that build leaves
+  // half as much again of room (CachedMesh::outgrown), so that a mesh still growing re-hashes its
+  // next frames without falling back each time. The draped cloth spreads over more cells at every
+  // step here (the CPU's census below: 409, 544, 596, 711, 802 cells): 1/8 alone would fall back
+  // at t = 0.15, 0.35 and 0.45.
+  auto frame = [](double t) { return makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, t); };
+  {  // The premise, on the CPU's hash (the same grid and cells as the device's; no device needed).
+    std::vector<std::size_t> cells;
+    for (double t : {0.05, 0.15, 0.25, 0.35, 0.45})
+      cells.push_back(HashedMesh<double>(frame(t)).stats().cells);
+    EXPECT_GT(cells[1] * 8, cells[0] * 9) << "the first step outgrows 1/8";
+    EXPECT_GT(cells[3] * 8, cells[1] * 9) << "1/8 after the first step's build would not hold 0.35";
+    EXPECT_LT(cells[4] * 2, cells[1] * 3) << "half as much again holds every step";
+  }
+  KDET_SKIP_WITHOUT_DEVICE();
+  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
+#if KDET_FCL_TEST_HAVE_CUDA
+  // No cache entry of an earlier test at the cloth's address: its arrays (grow-only) could hold
+  // every step here and hide the first fallback.
+  cuda::releaseDeviceMemory();
+  cuda::setProfiling(true);
+  HashedMesh<double> cloth(frame(0.05));
+  expectSameSelf(cloth, "t = 0.05");
+  EXPECT_EQ(cuda::lastQueryProfile().builds_with_readback, 1);
+  cloth.updateVertices(frame(0.15).vertices);
+  expectSameSelf(cloth, "t = 0.15");
+  EXPECT_EQ(cuda::lastQueryProfile().rehash_fallbacks, 1) << "t = 0.15: outgrown";
+  EXPECT_EQ(cuda::lastQueryProfile().rehash_outgrown, 1) << "t = 0.15";
+  for (double t : {0.25, 0.35, 0.45}) {
+    const std::string what = "t = " + std::to_string(t);
+    cloth.updateVertices(frame(t).vertices);
+    expectSameSelf(cloth, what);
+    const cuda::QueryProfile p = cuda::lastQueryProfile();
+    EXPECT_EQ(p.rehashes_async, 1) << what;
+    EXPECT_EQ(p.rehash_fallbacks, 0) << what << ": in the room the fallback left";
+    EXPECT_EQ(p.builds_with_readback, 0) << what;
+  }
+  cuda::setProfiling(false);
+#endif
+}
+
 TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
   // A re-hash without read-back runs as a CUDA graph (captured at the first, replayed while the
   // sizes and buffers stay, captured again when they change, e.g. after a fallback grew the

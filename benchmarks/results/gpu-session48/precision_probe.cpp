@@ -6,6 +6,9 @@
 // deforming objects from a buffer filled untimed, the inter queries, the self queries, results
 // kept per slot), the two precisions alternating frame by frame, rotated by round. Round 0 is a
 // warm-up. ROUNDS (default 12), PROFILE=1 (default) records the phases, PROFILE=0 only host times.
+// ONLY=float or ONLY=double runs one precision (for a tracer's totals per frame). FIRST=1 times
+// the first pass through the frames instead (round 0: every frame new to the meshes, as in a
+// simulation going forward; run it with ROUNDS=0), with each query's re-hash fallbacks.
 // The pair sets are not compared across precisions (float coordinates are other triangles); each
 // precision's pairs must be the same at every round of a frame ("MISMATCH", exit 1).
 // Build: g++ -O2 -std=c++17 -I include -I src -I . -I benchmarks precision_probe.cpp
@@ -127,6 +130,7 @@ struct Run {
           t[k + " #cand"].push_back(double(p.candidates));
           t[k + " #exact"].push_back(double(p.exact_tests));
           t[k + " #pairs"].push_back(double(p.pairs));
+          t[k + " #fallbacks"].push_back(double(p.rehash_fallbacks));
         }
       }
       ++slot;
@@ -148,6 +152,7 @@ int main(int argc, char** argv) {
   cfg.data_dir = d ? d : "";
   const int rounds = std::getenv("ROUNDS") ? std::atoi(std::getenv("ROUNDS")) : 12;
   const bool profile = !(std::getenv("PROFILE") && std::string(std::getenv("PROFILE")) == "0");
+  const bool first = std::getenv("FIRST") && std::string(std::getenv("FIRST")) == "1";
   std::vector<std::string> want;
   for (int i = 1; i < argc; ++i) want.push_back(argv[i]);
   if (want.empty()) want = {"unc-cloth-ball", "cloth-90k"};
@@ -155,6 +160,8 @@ int main(int argc, char** argv) {
   int mismatches = 0;
   for (const auto& s : kb::makeAllScenes(cfg, want)) {
     if (std::find(want.begin(), want.end(), s.name) == want.end()) continue;
+    const std::string only = std::getenv("ONLY") ? std::getenv("ONLY") : "";
+    const bool do_f = only != "double", do_d = only != "float";
     Run<float> rf(s);
     Run<double> rd(s);
     // kdet_bench's timed frames: every frame after the build frame (frame 0), each round
@@ -162,13 +169,13 @@ int main(int argc, char** argv) {
     // swapped every round.
     for (int r = 0; r <= rounds; ++r) {
       for (std::size_t f = 0; f < s.frames.size(); ++f) {
-        const bool timed = r > 0 && f > 0;
+        const bool timed = (first ? r == 0 : r > 0) && f > 0;
         if (r % 2 == 0) {
-          rf.frame(f, timed, profile);
-          rd.frame(f, timed, profile);
+          if (do_f) rf.frame(f, timed, profile);
+          if (do_d) rd.frame(f, timed, profile);
         } else {
-          rd.frame(f, timed, profile);
-          rf.frame(f, timed, profile);
+          if (do_d) rd.frame(f, timed, profile);
+          if (do_f) rf.frame(f, timed, profile);
         }
       }
     }
@@ -176,8 +183,15 @@ int main(int argc, char** argv) {
     std::printf("\n%s (%zu frames, %d rounds; medians over the timed frames, ms or counts)\n",
                 s.name.c_str(), s.frames.size(), rounds);
     std::printf("| what | float | double | double/float |\n|---|---:|---:|---:|\n");
-    for (const auto& [k, v] : rd.t) {
-      const double a = median(rf.t[k]), b = median(v);
+    auto sum = [](const std::vector<double>& v) {
+      double x = 0;
+      for (double y : v) x += y;
+      return x;
+    };
+    for (const auto& [k, v] : (do_d ? rd.t : rf.t)) {
+      const bool total = k.find("#fallbacks") != std::string::npos;  // summed, not a median
+      const double a = total ? sum(rf.t[k]) : median(rf.t[k]);
+      const double b = total ? sum(rd.t[k]) : median(rd.t[k]);
       std::printf("| %s | %.4f | %.4f | %.2f |\n", k.c_str(), a, b, a > 0 ? b / a : 0.0);
     }
   }
