@@ -2186,8 +2186,6 @@ inline std::size_t upperWords(std::size_t nt) { return (nt + 1) / 2; }
 
 inline std::size_t roundUp(std::size_t x, std::size_t a) { return (x + a - 1) / a * a; }
 
-/// KDET_FCL_CUDA_REHASH_CAP=k (tests): a re-hash without read-back uses at most k entries and k
-/// cells, so that it overflows and takes the fallback. 0 or unset: the arrays' capacities.
 /// The room a build with read-backs leaves in a mesh's entry and cell arrays after a re-hash
 /// without read-back outgrew them (CachedMesh::outgrown), as a share of what the build holds, on
 /// top of DeviceBuffer's 1/8: a mesh that outgrew its arrays by more than 1/8 in one frame is
@@ -2199,6 +2197,8 @@ std::size_t withRoom(std::size_t n, bool outgrown) {
   return outgrown ? n + n / kOutgrownRoomDiv : n;
 }
 
+/// KDET_FCL_CUDA_REHASH_CAP=k (tests): a re-hash without read-back uses at most k entries and k
+/// cells, so that it overflows and takes the fallback. 0 or unset: the arrays' capacities.
 std::uint32_t rehashCap(std::uint32_t cap) {
   const std::uint64_t k = detail::numberKnob("KDET_FCL_CUDA_REHASH_CAP", 0, 0xFFFFFFFFull, 0);
   return k > 0 && k < cap ? static_cast<std::uint32_t>(k) : cap;
