@@ -7,15 +7,11 @@
 # the device's busy time and its idle gaps per frame.
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
+. benchmarks/results/gpu-session48/probe_build.sh  # (the run had its command inline)
 ab_configure /tmp/s48c5
 cmake --build build-gpu --parallel 16 --target kdet_fcl >> $W/build.log 2>&1
 echo "lib rc=$? $(date +%T)" >> $T
-g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
-  -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 \
-  benchmarks/results/gpu-session48/precision_probe.cpp benchmarks/bench_scenes.cpp -L build-gpu \
-  -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath -Wl,--allow-shlib-undefined -o $W/probe \
-  > $W/probe-build.log 2>&1
-echo "probe build rc=$? $(date +%T)" >> $T
+probe_build
 NSYS=$(command -v nsys || ls /usr/local/cuda/bin/nsys /opt/nvidia/nsight-systems/*/bin/nsys \
   /usr/local/cuda/nsight-systems*/bin/nsys 2>/dev/null | head -1)
 echo "nsys: ${NSYS:-none} $($NSYS --version 2>&1 | head -1)" >> $T

@@ -10,15 +10,11 @@
 #      rebuilt at the end.
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
+. benchmarks/results/gpu-session48/probe_build.sh  # (the run had its command inline)
 ab_configure /tmp/s48c6
 ab_targets test_cuda_query
 ab_gtest tree '*Outgrows*:*Rehash*:*CountingBuild*'
-g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
-  -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 \
-  benchmarks/results/gpu-session48/precision_probe.cpp benchmarks/bench_scenes.cpp -L build-gpu \
-  -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath -Wl,--allow-shlib-undefined -o $W/probe \
-  > $W/probe-build.log 2>&1
-echo "probe build rc=$? $(date +%T)" >> $T
+probe_build
 first() {
   for i in 1 2 3; do
     FIRST=1 ROUNDS=0 ONLY=double timeout 60 $W/probe cloth-90k unc-cloth-ball \

@@ -10,6 +10,7 @@
 #      frames of a simulation going forward through the cloth's frames.
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
+. benchmarks/results/gpu-session48/probe_build.sh
 if [ "${1:-}" = check ]; then
   rm -rf build-gpu
   ab_check
@@ -20,13 +21,6 @@ date > $T
 W=/tmp/s49
 mkdir -p $W
 P=benchmarks/results/gpu-session48
-build_probe() {
-  g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
-    -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 $P/precision_probe.cpp \
-    benchmarks/bench_scenes.cpp -L build-gpu -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath \
-    -Wl,--allow-shlib-undefined -o $W/probe > $W/probe-build.log 2>&1
-  echo "probe build rc=$? $(date +%T)" >> $T
-}
 first() {
   for i in 1 2 3; do
     FIRST=1 ROUNDS=0 ONLY=double timeout 60 $W/probe cloth-90k 2>&1 | grep -v "^kdet_bench:" \
@@ -34,7 +28,7 @@ first() {
     echo "first pass $1 $i $(date +%T)" >> $T
   done
 }
-build_probe
+probe_build
 first tree
 git apply $P/outgrown.diff >> $T 2>&1
 cmake --build build-gpu --parallel 16 --target kdet_fcl >> $W/build.log 2>&1
