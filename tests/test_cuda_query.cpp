@@ -33,6 +33,12 @@
 using namespace kdet_fcl;
 using kdet_test::sorted;
 
+/// Skips a test whose counts assume re-hashes without read-back, which
+/// KDET_FCL_CUDA_SYNC_REHASH=1 turns off; `why` names what the test then lacks.
+#define KDET_SKIP_UNDER_SYNC_REHASH(why)                                                          \
+  if (const char* sync_ = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); sync_ && *sync_ == '1')       \
+    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (" why ")"
+
 namespace {
 
 using kdet_test::nearCoplanarSheets;
@@ -2410,8 +2416,7 @@ TYPED_TEST(CudaQueryTyped, ForecastReadsThePairsBackBehindTheCounts) {
   // Joint parts (intersectAll); an inter query's forecast belongs to its partner. The knob at 0:
   // never.
   KDET_SKIP_WITHOUT_DEVICE();
-  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
-    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no fallback)";
+  KDET_SKIP_UNDER_SYNC_REHASH("no fallback");
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
@@ -3109,8 +3114,7 @@ TEST(CudaQuery, RehashWithoutReadBackAndItsFallbacks) {
   // longer fit the compact sort must fall back to a build with read-backs and rerun the query,
   // with the CPU's pairs every time.
   KDET_SKIP_WITHOUT_DEVICE();
-  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
-    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
+  KDET_SKIP_UNDER_SYNC_REHASH("counts differ");
 #if KDET_FCL_TEST_HAVE_CUDA
   // Self queries take their same-level pairs from the cells here too (these meshes are below the
   // default's size): the forced overflows below must keep that kernel inside the arrays as well.
@@ -3191,8 +3195,7 @@ TEST(CudaQuery, AMeshThatOutgrowsItsHashGetsRoomForItsNextFrames) {
     EXPECT_LT(cells[4] * 2, cells[1] * 3) << "half as much again holds every step";
   }
   KDET_SKIP_WITHOUT_DEVICE();
-  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
-    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
+  KDET_SKIP_UNDER_SYNC_REHASH("counts differ");
 #if KDET_FCL_TEST_HAVE_CUDA
   // No cache entry of an earlier test at the cloth's address: its arrays (grow-only) could hold
   // every step here and hide the first fallback.
@@ -3224,8 +3227,7 @@ TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
   // arrays); KDET_FCL_CUDA_REHASH_GRAPH=0 enqueues the same work directly. Same pairs as the
   // CPU either way.
   KDET_SKIP_WITHOUT_DEVICE();
-  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
-    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (counts differ)";
+  KDET_SKIP_UNDER_SYNC_REHASH("counts differ");
 #if KDET_FCL_TEST_HAVE_CUDA
   cuda::setProfiling(true);
   for (const char* graph : {"1", "0"}) {
@@ -3264,8 +3266,7 @@ TYPED_TEST(CudaQueryTyped, CountingBuildsGroupEachCellsEntriesByHalvesWithTheSam
   // same on every axis and without groups, and the CPU's: self queries (with and without the
   // cells' pairs), inter queries both ways and the joint query.
   KDET_SKIP_WITHOUT_DEVICE();
-  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
-    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no counting build)";
+  KDET_SKIP_UNDER_SYNC_REHASH("no counting build");
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");
@@ -3375,8 +3376,7 @@ TYPED_TEST(CudaQueryTyped, AWarpScanLooksOnPastACellWhoseGroupsItSkipsWhole) {
   // is larger (so only q's lookups in A's hash can find the pair). With one lane per query the
   // warp's only live lane meets the skipped cell first.
   KDET_SKIP_WITHOUT_DEVICE();
-  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
-    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no counting build)";
+  KDET_SKIP_UNDER_SYNC_REHASH("no counting build");
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   kdet_test::ScopedEnv warp("KDET_FCL_CUDA_SCAN", "warp");
@@ -3447,8 +3447,7 @@ TYPED_TEST(CudaQueryTyped, RehashesGroupTheirEntriesByCountingAsTheSortWould) {
   // the cells and entries (KDET_FCL_CUDA_REHASH_CAP) fall back to a build with read-backs, with
   // the same pairs.
   KDET_SKIP_WITHOUT_DEVICE();
-  if (const char* e = std::getenv("KDET_FCL_CUDA_SYNC_REHASH"); e && *e == '1')
-    GTEST_SKIP() << "KDET_FCL_CUDA_SYNC_REHASH=1: every re-hash reads back (no counting build)";
+  KDET_SKIP_UNDER_SYNC_REHASH("no counting build");
 #if KDET_FCL_TEST_HAVE_CUDA
   using S = TypeParam;
   kdet_test::ScopedEnv no_kept("KDET_FCL_CUDA_SELF_CACHE", "0");  // every query on the device
