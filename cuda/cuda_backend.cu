@@ -39,6 +39,7 @@
 #include <cub/device/device_scan.cuh>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <list>
@@ -2039,6 +2040,12 @@ struct Context {
   std::vector<cudaEvent_t> round_ev;
   bool profiling = false;
   QueryProfile profile;
+  unsigned long long allocations_at_start = 0;  // g_device_allocations when the query began
+  /// A query's profile starts empty.
+  void startProfile() {
+    profile = QueryProfile{};
+    allocations_at_start = g_device_allocations.load(std::memory_order_relaxed);
+  }
 
   // Scratch shared by all builds and queries (serialised by the mutex).
   DeviceBuffer<unsigned char> cub_temp;
@@ -2206,6 +2213,11 @@ std::uint32_t rehashCap(std::uint32_t cap) {
 
 /// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
 bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", true); }
+
+/// KDET_FCL_CUDA_GRAPH_UPDATE=0: a re-hash graph captured again (its sizes or buffers changed)
+/// is always instantiated anew, never written into the mesh's executable graph by
+/// cudaGraphExecUpdate (read at every capture).
+bool graphUpdateOn() { return detail::switchKnob("KDET_FCL_CUDA_GRAPH_UPDATE", true); }
 
 /// Triangles up to which a re-hash without read-back groups its entries by counting. H100,
 /// gpu_bench, the counting build (one thread per entry) against the sort in alternating rounds in
@@ -2664,7 +2676,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
       reinterpret_cast<std::uintptr_t>(ctx.pairs_sorted.data()),
       reinterpret_cast<std::uintptr_t>(ctx.cub_temp.data()), ctx.cub_temp.capacity()};
   if (m.graph == nullptr || m.graph_key != key) {
-    m.dropGraph();
+    const auto t0 = std::chrono::steady_clock::now();
     cudaGraph_t g = nullptr;
     CUDA_TRY(cudaStreamBeginCapture(s, cudaStreamCaptureModeRelaxed));
     try {
@@ -2675,13 +2687,33 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
       throw;
     }
     CUDA_TRY(cudaStreamEndCapture(s, &g));
-    const cudaError_t e = cudaGraphInstantiate(&m.graph, g, 0);
-    (void)cudaGraphDestroy(g);
-    if (e != cudaSuccess) {
-      m.graph = nullptr;
-      CUDA_TRY(e);
+    // The same operations over other sizes or buffers (a grown scratch buffer, a fallback's
+    // larger arrays) usually keep the graph's shape: then the executable graph takes the new
+    // parameters in place, much cheaper than a new instantiation. Where the shape changed (a
+    // sort of another kind, the counting build switched), the update fails and the graph is
+    // instantiated anew.
+    bool updated = false;
+    if (m.graph != nullptr && graphUpdateOn()) {
+      cudaGraphExecUpdateResultInfo info{};
+      updated = cudaGraphExecUpdate(m.graph, g, &info) == cudaSuccess;
+      if (!updated) (void)cudaGetLastError();  // (a refused update is not sticky: clear it)
     }
+    if (updated) {
+      ++ctx.profile.rehash_graph_updates;
+    } else {
+      m.dropGraph();
+      const cudaError_t e = cudaGraphInstantiate(&m.graph, g, 0);
+      if (e != cudaSuccess) {
+        (void)cudaGraphDestroy(g);
+        m.graph = nullptr;
+        CUDA_TRY(e);
+      }
+    }
+    (void)cudaGraphDestroy(g);
     m.graph_key = key;
+    ++ctx.profile.rehash_captures;
+    ctx.profile.rehash_capture_ms +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   } else {
     // What buildOnDevice() records on the host besides the enqueued work.
     m.pending = true;
@@ -3572,6 +3604,8 @@ QueryResult runQuery(Context& ctx, Launch&& launch, Pending&& pending, int a_bit
     }
     ctx.profile.passes = passes;
     ctx.profile.pairs = n;
+    ctx.profile.device_allocations = static_cast<int>(
+        g_device_allocations.load(std::memory_order_relaxed) - ctx.allocations_at_start);
   }
   return res;
 }
@@ -3947,7 +3981,7 @@ QueryResult interImpl(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>&
                       const QueryOptions& options, DeviceOut* dev = nullptr,
                       std::vector<TrianglePair>* keep = nullptr) {
   const std::size_t na = a.numTriangles(), nb = b.numTriangles();
-  ctx.profile = QueryProfile{};
+  ctx.startProfile();
   if (na == 0 || nb == 0) return QueryResult{};
   ctx.record(0);
   CachedMesh<S>& A = acquire(ctx, a);
@@ -4169,7 +4203,7 @@ template <class S>
 QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions& options,
                      DeviceOut* dev = nullptr, std::vector<TrianglePair>* keep = nullptr) {
   const std::size_t n = mesh.numTriangles();
-  ctx.profile = QueryProfile{};
+  ctx.startProfile();
   if (n < 2) return QueryResult{};
   ctx.record(0);
   CachedMesh<S>& M = acquire(ctx, mesh);
@@ -4201,7 +4235,7 @@ QueryResult selfImpl(Context& ctx, const HashedMesh<S>& mesh, const QueryOptions
 template <class S>
 void jointQuery(Context& ctx, const HashedMesh<S>& a, const HashedMesh<S>& b,
                 const QueryOptions& options, QueryResult* parts, DeviceOut* dev) {
-  ctx.profile = QueryProfile{};
+  ctx.startProfile();
   ctx.record(0);
   CachedMesh<S>& M = acquire(ctx, a, &b);
   selfQuery(ctx, M, sourceOf(&a, &b), static_cast<std::uint32_t>(a.numTriangles()), parts,

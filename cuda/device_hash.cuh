@@ -6,6 +6,7 @@
 
 #include <cuda_runtime_api.h>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
@@ -18,6 +19,9 @@
 
 namespace kdet_fcl {
 namespace cuda {
+
+/// Allocations made by every DeviceBuffer of the process (QueryProfile::device_allocations).
+inline std::atomic<unsigned long long> g_device_allocations{0};
 
 /// A grow-only device allocation (global memory). reserve() never shrinks and does not keep the
 /// contents when it grows; release() is noexcept (used on error paths and at destruction).
@@ -43,6 +47,7 @@ class DeviceBuffer {
     const std::size_t want = (n == 0 ? 1 : (slack ? n + n / 8 : n));
     void* p = nullptr;
     CUDA_TRY(cudaMalloc(&p, want * sizeof(T)));
+    g_device_allocations.fetch_add(1, std::memory_order_relaxed);
     p_ = static_cast<T*>(p);
     cap_ = want;
   }

@@ -1,0 +1,39 @@
+#!/bin/bash
+# Session 49, call 1 (fresh machine; carry .fcl-debs/root and .gpu-data): the re-hash graph
+# updated in place (cudaGraphExecUpdate) when its buffers moved, and a simulation going forward.
+#   1. the library, test_cuda_query and forward_probe.cpp;
+#   2. the re-hash graph's tests (the new ARehashGraphWhoseBuffersMoved..., the graph's replay
+#      test, the outgrown test, the re-hash fallbacks), then memcheck on the new test;
+#   3. forward_probe on the 90k cloth (20 frames) and the 250k cloth, each in its own process,
+#      with KDET_FCL_CUDA_GRAPH_UPDATE=1 and 0 alternating, two processes each on the 90k cloth.
+cd "$(dirname "$0")/../../.."
+. benchmarks/results/gpu-session44/ab_common.sh
+W=/tmp/s49
+ab_configure $W
+ab_targets kdet_fcl test_cuda_query
+g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
+  -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 \
+  benchmarks/results/gpu-session49/forward_probe.cpp benchmarks/bench_scenes.cpp \
+  -L build-gpu -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath -Wl,--allow-shlib-undefined \
+  -o $W/fprobe > $W/fprobe-build.log 2>&1
+echo "probe build rc=$? $(date +%T)" >> $T
+ab_gtest graph 'CudaQuery.ARehashGraph*:CudaQuery.RehashGraph*:CudaQuery.AMeshThatOutgrows*:CudaQuery.RehashWithout*:CudaQueryTyped/*.ANewMeshAtAFreed*'
+grep -E "Failure|Which is|Expected|actual" $W/test-graph.txt | head -40 >> $T
+SAN="$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)"
+timeout 120 $SAN --tool memcheck build-gpu/tests/test_cuda_query \
+  --gtest_filter='CudaQuery.ARehashGraphWhoseBuffersMoved*' > $W/memcheck.txt 2>&1
+echo "memcheck rc=$? $(date +%T): $(grep 'ERROR SUMMARY' $W/memcheck.txt)" >> $T
+for r in 1 2; do
+  for u in 1 0; do
+    KDET_FCL_CUDA_GRAPH_UPDATE=$u FRAMES=20 timeout 60 $W/fprobe cloth-90k 2>&1 \
+      | grep -v "^kdet_bench:" > $OUT/fwd-90k-u$u-$r.txt
+    echo "forward 90k update=$u $r rc=${PIPESTATUS[0]} $(date +%T)" >> $T
+  done
+done
+for u in 1 0; do
+  KDET_FCL_CUDA_GRAPH_UPDATE=$u FRAMES=12 timeout 90 $W/fprobe cloth-250k 2>&1 \
+    | grep -v "^kdet_bench:" > $W/fwd-250k-u$u.txt
+  echo "forward 250k update=$u rc=${PIPESTATUS[0]} $(date +%T)" >> $T
+done
+date >> $T
+tar czf $OUT/out.tgz -C $W --exclude=fprobe .

@@ -1,0 +1,25 @@
+#!/bin/bash
+# Session 49, call 2 (fresh machine; carry .fcl-debs/root and .gpu-data): the final tree's GPU
+# check (scripts/gpu_check.sh: ctest -L cuda, memcheck and racecheck, whose filter now includes
+# the graph's moved-buffers test, gpu_bench on the cloth ball), then, if time is left, the
+# forward probe on the 90k cloth with CUDA's modules loaded eagerly and lazily (the default):
+# is the first pass's slow frames 2 and 3 (call 1) the kernels' lazy loading?
+cd "$(dirname "$0")/../../.."
+. benchmarks/results/gpu-session44/ab_common.sh
+W=/tmp/s49
+mkdir -p $W
+rm -rf build-gpu
+ab_check
+g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
+  -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 \
+  benchmarks/results/gpu-session49/forward_probe.cpp benchmarks/bench_scenes.cpp \
+  -L build-gpu -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath -Wl,--allow-shlib-undefined \
+  -o $W/fprobe > $W/fprobe-build.log 2>&1
+echo "probe build rc=$? $(date +%T)" >> $T
+for m in EAGER LAZY; do
+  CUDA_MODULE_LOADING=$m FRAMES=20 timeout 20 $W/fprobe cloth-90k 2>&1 | grep -v "^kdet_bench:" \
+    > $OUT/fwd-90k-$m.txt
+  echo "forward 90k $m rc=${PIPESTATUS[0]} $(date +%T)" >> $T
+done
+date >> $T
+tar czf $OUT/check.tgz -C $OUT check && rm -rf $OUT/check
