@@ -2214,11 +2214,6 @@ std::uint32_t rehashCap(std::uint32_t cap) {
 /// KDET_FCL_CUDA_REHASH_GRAPH=0 turns the re-hash graph off (read at every build).
 bool rehashGraphOn() { return detail::switchKnob("KDET_FCL_CUDA_REHASH_GRAPH", true); }
 
-/// KDET_FCL_CUDA_GRAPH_UPDATE=0: a re-hash graph captured again (its sizes or buffers changed)
-/// is always instantiated anew, never written into the mesh's executable graph by
-/// cudaGraphExecUpdate (read at every capture).
-bool graphUpdateOn() { return detail::switchKnob("KDET_FCL_CUDA_GRAPH_UPDATE", true); }
-
 /// Triangles up to which a re-hash without read-back groups its entries by counting. H100,
 /// gpu_bench, the counting build (one thread per entry) against the sort in alternating rounds in
 /// one run (benchmarks/RESULTS-gpu.md), ms of build and of frame. 2026-11-23: the UNC cloth ball
@@ -2687,29 +2682,17 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
       throw;
     }
     CUDA_TRY(cudaStreamEndCapture(s, &g));
-    // The same operations over other sizes or buffers (a grown scratch buffer, a fallback's
-    // larger arrays) usually keep the graph's shape: then the executable graph takes the new
-    // parameters in place, much cheaper than a new instantiation. Where the shape changed (a
-    // sort of another kind, the counting build switched), the update fails and the graph is
-    // instantiated anew.
-    bool updated = false;
-    if (m.graph != nullptr && graphUpdateOn()) {
-      cudaGraphExecUpdateResultInfo info{};
-      updated = cudaGraphExecUpdate(m.graph, g, &info) == cudaSuccess;
-      if (!updated) (void)cudaGetLastError();  // (a refused update is not sticky: clear it)
-    }
-    if (updated) {
-      ++ctx.profile.rehash_graph_updates;
-    } else {
-      m.dropGraph();
-      const cudaError_t e = cudaGraphInstantiate(&m.graph, g, 0);
-      if (e != cudaSuccess) {
-        (void)cudaGraphDestroy(g);
-        m.graph = nullptr;
-        CUDA_TRY(e);
-      }
-    }
+    // (Writing the new capture into the old executable graph, cudaGraphExecUpdate, took 0.06-0.08
+    // ms of host time against 0.13-0.36 for an instantiation on an H200, but the runtime refuses
+    // it where the shape changed, and memcheck reports each refusal as an API error; session 49,
+    // benchmarks/RESULTS-gpu.md. Captures are rare: 2 in 20 new frames of the 90k cloth.)
+    m.dropGraph();
+    const cudaError_t e = cudaGraphInstantiate(&m.graph, g, 0);
     (void)cudaGraphDestroy(g);
+    if (e != cudaSuccess) {
+      m.graph = nullptr;
+      CUDA_TRY(e);
+    }
     m.graph_key = key;
     ++ctx.profile.rehash_captures;
     ctx.profile.rehash_capture_ms +=

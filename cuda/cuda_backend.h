@@ -260,11 +260,8 @@ struct QueryProfile {
   int rehash_graphs = 0;        ///< re-hashes run as a CUDA graph (captured or replayed)
   int rehash_captures = 0;      ///< of them, those whose graph was captured (the mesh's first,
                                 ///< or its sizes or buffers changed since the last capture)
-  int rehash_graph_updates = 0; ///< of the captures, those written into the mesh's executable
-                                ///< graph (cudaGraphExecUpdate) instead of a new instantiation
-                                ///< (KDET_FCL_CUDA_GRAPH_UPDATE=0: never)
-  double rehash_capture_ms = 0; ///< host time of those captures with their instantiation or
-                                ///< update (0 where every re-hash replayed its graph)
+  double rehash_capture_ms = 0; ///< host time of those captures with their instantiation (0
+                                ///< where every re-hash replayed its graph)
   int device_allocations = 0;   ///< device buffers allocated or grown during the query (each a
                                 ///< device synchronisation, a cudaFree and a cudaMalloc)
   int count_builds = 0;         ///< of the re-hashes without read-back, those that grouped their

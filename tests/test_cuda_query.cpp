@@ -3256,65 +3256,57 @@ TEST(CudaQuery, RehashGraphReplaysRecapturesAndCanBeTurnedOff) {
 #endif
 }
 
-TEST(CudaQuery, ARehashGraphWhoseBuffersMovedIsUpdatedInPlaceOrInstantiatedAnew) {
+TEST(CudaQuery, ARehashGraphWhoseBuffersMovedIsCapturedAgain) {
   // A re-hash graph is captured again when its sizes or buffers changed. Here a denser query in
   // between grows the scratch that every query shares, so the cloth's next re-hash finds its
   // buffers elsewhere (the old ones are freed: a graph still pointing there would read freed
-  // memory, which the sanitizer run of this test would report, and find other pairs). With
-  // KDET_FCL_CUDA_GRAPH_UPDATE=1 (the default) the new capture is written into the executable
-  // graph (cudaGraphExecUpdate: same operations, other parameters); with 0 it is instantiated
-  // anew. Either way the pairs are the CPU's, and a re-hash that finds the same sizes and buffers
-  // replays its graph without a capture and without allocating.
+  // memory, which the sanitizer run of this test would report, and find other pairs). The pairs
+  // are the CPU's, and a re-hash that finds the same sizes and buffers replays its graph without
+  // a capture and without allocating.
   KDET_SKIP_WITHOUT_DEVICE();
   KDET_SKIP_UNDER_SYNC_REHASH("no re-hash graph");
 #if KDET_FCL_TEST_HAVE_CUDA
   kdet_test::ScopedEnv graph("KDET_FCL_CUDA_REHASH_GRAPH", "1");
-  for (const char* update : {"1", "0"}) {
-    kdet_test::ScopedEnv env("KDET_FCL_CUDA_GRAPH_UPDATE", update);
-    const std::string how = std::string("update ") + update + ": ";
-    cuda::releaseDeviceMemory();  // (no earlier entry's larger arrays at the cloth's address)
-    cuda::setProfiling(true);
-    HashedMesh<double> cloth(makeDrapedCloth<double>(50, 4.0, 1.0, 0.03, 0.8));
-    expectSameSelf(cloth, how + "first build");
-    cuda::markDeformed(cloth);
-    expectSameSelf(cloth, how + "first re-hash");
-    cuda::QueryProfile p = cuda::lastQueryProfile();
-    EXPECT_EQ(p.rehash_graphs, 1) << how << "first re-hash";
-    EXPECT_EQ(p.rehash_captures, 1) << how << "first re-hash: its graph is new";
-    EXPECT_EQ(p.rehash_graph_updates, 0) << how << "first re-hash: nothing to update";
-    EXPECT_GT(p.rehash_capture_ms, 0.0) << how << "first re-hash";
-    cuda::markDeformed(cloth);  // (a query's scratch may still grow to its forecasts here)
-    expectSameSelf(cloth, how + "second re-hash");
-    cuda::markDeformed(cloth);
-    expectSameSelf(cloth, how + "same sizes and buffers");
+  cuda::releaseDeviceMemory();  // (no earlier entry's larger arrays at the cloth's address)
+  cuda::setProfiling(true);
+  HashedMesh<double> cloth(makeDrapedCloth<double>(50, 4.0, 1.0, 0.03, 0.8));
+  expectSameSelf(cloth, "first build");
+  cuda::markDeformed(cloth);
+  expectSameSelf(cloth, "first re-hash");
+  cuda::QueryProfile p = cuda::lastQueryProfile();
+  EXPECT_EQ(p.rehash_graphs, 1) << "first re-hash";
+  EXPECT_EQ(p.rehash_captures, 1) << "first re-hash: its graph is new";
+  EXPECT_GT(p.rehash_capture_ms, 0.0) << "first re-hash";
+  cuda::markDeformed(cloth);  // (a query's scratch may still grow to its forecasts here)
+  expectSameSelf(cloth, "second re-hash");
+  cuda::markDeformed(cloth);
+  expectSameSelf(cloth, "same sizes and buffers");
+  p = cuda::lastQueryProfile();
+  EXPECT_EQ(p.rehash_graphs, 1) << "same sizes and buffers";
+  EXPECT_EQ(p.rehash_captures, 0) << "same sizes and buffers: replayed";
+  EXPECT_EQ(p.rehash_capture_ms, 0.0) << "same sizes and buffers";
+  EXPECT_EQ(p.device_allocations, 0) << "same sizes and buffers";
+  {
+    HashedMesh<double> crowd(makeRandomSoup<double>(4000, 0.3, 0.05, 0.3, 7));
+    const std::size_t cloth_cands = p.candidates;
+    expectSameSelf(crowd, "crowded soup");
     p = cuda::lastQueryProfile();
-    EXPECT_EQ(p.rehash_graphs, 1) << how << "same sizes and buffers";
-    EXPECT_EQ(p.rehash_captures, 0) << how << "same sizes and buffers: replayed";
-    EXPECT_EQ(p.rehash_capture_ms, 0.0) << how << "same sizes and buffers";
-    EXPECT_EQ(p.device_allocations, 0) << how << "same sizes and buffers";
-    {
-      HashedMesh<double> crowd(makeRandomSoup<double>(4000, 0.3, 0.05, 0.3, 7));
-      const std::size_t cloth_cands = p.candidates;
-      expectSameSelf(crowd, how + "crowded soup");
-      p = cuda::lastQueryProfile();
-      ASSERT_GT(p.candidates, 4 * cloth_cands) << how << "the soup needs more scratch";
-      EXPECT_GT(p.device_allocations, 0) << how << "crowded soup";
-    }
-    cuda::markDeformed(cloth);
-    expectSameSelf(cloth, how + "after the crowded soup");
-    p = cuda::lastQueryProfile();
-    EXPECT_EQ(p.rehash_graphs, 1) << how << "after the crowded soup";
-    EXPECT_EQ(p.rehash_captures, 1) << how << "after the crowded soup: its buffers moved";
-    EXPECT_EQ(p.rehash_graph_updates, *update == '1' ? 1 : 0) << how << "after the crowded soup";
-    EXPECT_EQ(p.rehash_fallbacks, 0) << how << "after the crowded soup";
-    std::vector<Vec3<double>> moved = makeDrapedCloth<double>(50, 4.0, 1.0, 0.03, 0.8).vertices;
-    for (auto& v : moved) v = v + Vec3<double>{1e-3, 0, 0};
-    cloth.updateVertices(moved);
-    expectSameSelf(cloth, how + "next frame");
-    p = cuda::lastQueryProfile();
-    EXPECT_EQ(p.rehash_captures, 0) << how << "next frame: replayed";
-    EXPECT_EQ(p.rehash_fallbacks, 0) << how << "next frame";
+    ASSERT_GT(p.candidates, 4 * cloth_cands) << "the soup needs more scratch";
+    EXPECT_GT(p.device_allocations, 0) << "crowded soup";
   }
+  cuda::markDeformed(cloth);
+  expectSameSelf(cloth, "after the crowded soup");
+  p = cuda::lastQueryProfile();
+  EXPECT_EQ(p.rehash_graphs, 1) << "after the crowded soup";
+  EXPECT_EQ(p.rehash_captures, 1) << "after the crowded soup: its buffers moved";
+  EXPECT_EQ(p.rehash_fallbacks, 0) << "after the crowded soup";
+  std::vector<Vec3<double>> moved = makeDrapedCloth<double>(50, 4.0, 1.0, 0.03, 0.8).vertices;
+  for (auto& v : moved) v = v + Vec3<double>{1e-3, 0, 0};
+  cloth.updateVertices(moved);
+  expectSameSelf(cloth, "next frame");
+  p = cuda::lastQueryProfile();
+  EXPECT_EQ(p.rehash_captures, 0) << "next frame: replayed";
+  EXPECT_EQ(p.rehash_fallbacks, 0) << "next frame";
   cuda::setProfiling(false);
 #endif
 }

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Session 49, call 1 (fresh machine; carry .fcl-debs/root and .gpu-data): the re-hash graph
+# Session 49, call 3 (fresh machine; carry .fcl-debs/root and .gpu-data): the re-hash graph
 # updated in place (cudaGraphExecUpdate) when its buffers moved, and a simulation going forward.
 #   1. the library, test_cuda_query and forward_probe.cpp;
 #   2. the re-hash graph's tests (the new ARehashGraphWhoseBuffersMoved..., the graph's replay

@@ -1,9 +1,9 @@
 #!/bin/bash
-# Session 49, call 2 (fresh machine; carry .fcl-debs/root and .gpu-data): the final tree's GPU
+# Session 49, call 4 (fresh machine; carry .fcl-debs/root and .gpu-data): bb5b5f0's GPU
 # check (scripts/gpu_check.sh: ctest -L cuda, memcheck and racecheck, whose filter now includes
 # the graph's moved-buffers test, gpu_bench on the cloth ball), then, if time is left, the
 # forward probe on the 90k cloth with CUDA's modules loaded eagerly and lazily (the default):
-# is the first pass's slow frames 2 and 3 (call 1) the kernels' lazy loading?
+# are the first pass's slow frames 2 and 3 (call 3) the kernels' lazy loading?
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
 W=/tmp/s49
