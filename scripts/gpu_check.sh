@@ -21,6 +21,8 @@
 #               (queries, an overflow, 128-bit keys, both scans, the commit's and update's copies,
 #               the counting build's grouped cells, a scan past a cell it skips whole, a
 #               mesh that outgrows its hash, a re-hash graph whose buffers moved)
+#   SANITIZER_TOOLS  the compute-sanitizer tools SANITIZER=1 runs (default: "memcheck racecheck";
+#               racecheck takes minutes, so a time-limited session may run each in its own call)
 #   PRECISION_BENCH  1: also run benchmarks/precision_bench (the speed/accuracy trade of the
 #               predicate modes on the CPU and the GPU; outputs in OUT/precision)
 # Exit status: 0 when the build and both test runs pass, else non-zero.
@@ -155,7 +157,7 @@ if [[ "${SANITIZER:-0}" == 1 ]]; then
   SAN="$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)"
   # (with the copies of commitVertices and updateVertices beside the queries' kernels)
   filter='CudaQueryTyped/*.ClothOverSphereAndSelf:CudaQuery.OutputOverflowGrowsAndReruns:CudaQuery.HugeSizeRatioUsesFull128BitKeys:CudaQuery.WarpAndTileScansFindTheSameCandidatesAndPairs:CudaQuery.ACommitCopies*:CudaQuery.UpdateVerticesCopies*:CudaQueryTyped/0.CountingBuildsGroup*:CudaQueryTyped/0.AWarpScanLooksOnPast*:CudaQueryTyped/0.ANewMeshAtAFreed*:CudaQuery.AMeshThatOutgrows*:CudaQuery.ARehashGraphWhoseBuffersMoved*'
-  for tool in memcheck racecheck; do
+  for tool in ${SANITIZER_TOOLS:-memcheck racecheck}; do
     log "compute-sanitizer --tool $tool (log: $OUT/sanitizer-$tool.log)"
     "$SAN" --tool "$tool" --error-exitcode 3 "$BUILD_DIR/tests/test_cuda_query" \
       --gtest_filter="$filter" >"$OUT/sanitizer-$tool.log" 2>&1 || san_rc=1
