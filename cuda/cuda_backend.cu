@@ -4605,14 +4605,21 @@ std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<S>& mesh, c
   return nullptr;
 }
 
+/// Whether `m` is `mesh`'s own entry (the mesh alone, not an entry another mesh left at its
+/// address) with a build whose sizes are known (valid, not pending a check): the entries the
+/// test hooks below read.
+template <class S>
+bool settledEntryOf(const CachedMesh<S>& m, const HashedMesh<S>& mesh) {
+  return m.owner == &mesh && m.owner2 == nullptr && m.identity == mesh.identity() && m.valid &&
+         !m.pending;
+}
+
 template <class S>
 std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh) {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
-    if (m.owner != &mesh || m.owner2 != nullptr || m.identity != mesh.identity() || !m.valid ||
-        m.pending || !m.upper_ready)
-      continue;
+    if (!settledEntryOf(m, mesh) || !m.upper_ready) continue;
     std::vector<std::uint32_t> words(upperWords(m.nt));
     CUDA_TRY(cudaMemcpyAsync(words.data(), m.upper.data(), words.size() * sizeof(std::uint32_t),
                              cudaMemcpyDeviceToHost, ctx.stream));
@@ -4631,9 +4638,7 @@ CellLayout cellLayout(const HashedMesh<S>& mesh) {
   std::lock_guard<std::mutex> lock(ctx.mutex);
   CellLayout out;
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
-    if (m.owner != &mesh || m.owner2 != nullptr || m.identity != mesh.identity() || !m.valid ||
-        m.pending)
-      continue;
+    if (!settledEntryOf(m, mesh)) continue;
     BuildInfo info;
     CUDA_TRY(cudaMemcpyAsync(&info, m.dinfo.data(), sizeof(BuildInfo), cudaMemcpyDeviceToHost,
                              ctx.stream));

@@ -8,15 +8,11 @@
 #      with KDET_FCL_CUDA_GRAPH_UPDATE=1 and 0 alternating, two processes each on the 90k cloth.
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
+. benchmarks/results/gpu-session48/probe_build.sh
 W=/tmp/s49
 ab_configure $W
 ab_targets kdet_fcl test_cuda_query
-g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
-  -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 \
-  benchmarks/results/gpu-session49/forward_probe.cpp benchmarks/bench_scenes.cpp \
-  -L build-gpu -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath -Wl,--allow-shlib-undefined \
-  -o $W/fprobe > $W/fprobe-build.log 2>&1
-echo "probe build rc=$? $(date +%T)" >> $T
+probe_build benchmarks/results/gpu-session49/forward_probe.cpp $W/fprobe  # (inline in the run)
 ab_gtest graph 'CudaQuery.ARehashGraph*:CudaQuery.RehashGraph*:CudaQuery.AMeshThatOutgrows*:CudaQuery.RehashWithout*:CudaQueryTyped/*.ANewMeshAtAFreed*'
 grep -E "Failure|Which is|Expected|actual" $W/test-graph.txt | head -40 >> $T
 SAN="$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)"

@@ -6,16 +6,12 @@
 # are the first pass's slow frames 2 and 3 (call 3) the kernels' lazy loading?
 cd "$(dirname "$0")/../../.."
 . benchmarks/results/gpu-session44/ab_common.sh
+. benchmarks/results/gpu-session48/probe_build.sh
 W=/tmp/s49
 mkdir -p $W
 rm -rf build-gpu
 ab_check
-g++ -O2 -std=c++17 -I include -I src -I . -I build-gpu -I benchmarks -isystem $D/usr/include \
-  -isystem $D/usr/include/x86_64-linux-gnu -isystem /usr/include/eigen3 \
-  benchmarks/results/gpu-session49/forward_probe.cpp benchmarks/bench_scenes.cpp \
-  -L build-gpu -lkdet_fcl -L$L -lfcl -lccd -loctomap -loctomath -Wl,--allow-shlib-undefined \
-  -o $W/fprobe > $W/fprobe-build.log 2>&1
-echo "probe build rc=$? $(date +%T)" >> $T
+probe_build benchmarks/results/gpu-session49/forward_probe.cpp $W/fprobe  # (inline in the run)
 for m in EAGER LAZY; do
   CUDA_MODULE_LOADING=$m FRAMES=20 timeout 20 $W/fprobe cloth-90k 2>&1 | grep -v "^kdet_bench:" \
     > $OUT/fwd-90k-$m.txt

@@ -8,7 +8,7 @@
 // (cudaGraphExecUpdate), capture host time, device allocations and fallbacks.
 // Usage: forward_probe SCENE (FRAMES, default 20, frames of the procedural animation; double;
 // one scene per process, since a freed mesh's address carries its cache entry's arrays).
-// Build: as precision_probe.cpp (gpu-session48/probe_build.sh with this file).
+// Build: probe_build benchmarks/results/gpu-session49/forward_probe.cpp BIN (gpu-session48/probe_build.sh).
 // Ran (calls 3 and 4) against commit bb5b5f0, whose QueryProfile had rehash_graph_updates (the
 // graph updated in place, taken back after call 4); it no longer compiles against the tree.
 #include <algorithm>
