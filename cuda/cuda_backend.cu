@@ -2275,7 +2275,8 @@ std::size_t countBuildWords(std::uint32_t cap, std::uint32_t slot_count, std::ui
 /// drops before that buffer can go; updateVertices writes into the same buffer), and every later
 /// upload of it is one DMA from it, with no copy into the staging buffer but for the partial
 /// pages at its ends (staging::pinnedUpload). A buffer that cannot be registered is
-/// recorded as such and takes the staged path from then on. Returns whether the DMA path ran.
+/// recorded as such and takes the staged path from then on. The registration's host time goes
+/// into QueryProfile::host_register_ms. Returns whether the DMA path ran.
 /// (The query synchronises its stream before it returns, so the buffer is not read after.)
 template <class S>
 bool uploadVertices(Context& ctx, Vec3<S>* dst, const HashedMesh<S>* owner,
@@ -2287,7 +2288,11 @@ bool uploadVertices(Context& ctx, Vec3<S>* dst, const HashedMesh<S>* owner,
     if (pin.at() != src) {
       pin.see(src);  // a first upload is staged: a buffer uploaded once is never registered
     } else if (!pin.tried()) {
+      const auto t0 = std::chrono::steady_clock::now();
       pin.set(src, staging::pinHostMemory(src, bytes));
+      ++ctx.profile.host_registrations;
+      ctx.profile.host_register_ms +=
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     }
     if (pin.pinned()) {
       CUDA_TRY(staging::pinnedUpload(dst, src, bytes, stage, ctx.stream));

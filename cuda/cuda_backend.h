@@ -273,6 +273,10 @@ struct QueryProfile {
                                 ///< never after updateVertices or markDeformed
   int pinned_uploads = 0;       ///< vertex uploads copied straight from the mesh's page-locked
                                 ///< buffer (KDET_FCL_CUDA_PIN_VERTICES; arrays of 256 KiB and up)
+  int host_registrations = 0;   ///< vertex buffers registered as page-locked memory during the
+                                ///< query (cudaHostRegister, on a buffer's second upload; once
+                                ///< per buffer, a refused one counted too)
+  double host_register_ms = 0;  ///< host time of those registrations (0 where there were none)
   int commit_uploads = 0;       ///< vertex uploads skipped because commitVertices or
                                 ///< updateVertices had copied the positions to the device as
                                 ///< it passed over them (startCommitCopy,

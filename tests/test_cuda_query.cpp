@@ -813,6 +813,11 @@ TEST(CudaQuery, LargeVertexArraysAreCopiedStraightFromTheirRegisteredBuffer) {
     if (t == 0.4 && cloth.hostPin().tried() && !cloth.hostPin().pinned())
       GTEST_SKIP() << "this machine refused to register host memory (cudaHostRegister)";
     EXPECT_EQ(p, 1);
+    // Registered once, on the buffer's second upload (QueryProfile::host_registrations).
+    const cuda::QueryProfile prof = cuda::lastQueryProfile();
+    EXPECT_EQ(prof.host_registrations, t == 0.4 ? 1 : 0) << t;
+    if (t == 0.4) EXPECT_GT(prof.host_register_ms, 0.0);
+    else EXPECT_EQ(prof.host_register_ms, 0.0) << t;
     EXPECT_EQ(cloth.mesh().vertices.data(), buffer);
     EXPECT_TRUE(cloth.hostPin().pinned());
   }
@@ -878,6 +883,7 @@ TEST(CudaQuery, CommittedVerticesAreUploadedFromBothRegisteredBuffers) {
   const void* first = cloth.mesh().vertices.data();
   // Frames 1..6 alternate: the second buffer's first upload (frame 1) is staged, every later
   // upload of either buffer is a DMA from its registration.
+  int registrations = 0;
   for (int f = 1; f <= 6; ++f) {
     const TriangleMesh<float> next = frame(0.2 + 0.1 * f);
     Vec3<float>* w = cloth.vertexWriteBuffer();
@@ -891,6 +897,15 @@ TEST(CudaQuery, CommittedVerticesAreUploadedFromBothRegisteredBuffers) {
     if (f == 2 && cloth.hostPin().tried() && !cloth.hostPin().pinned())
       GTEST_SKIP() << "this machine refused to register host memory (cudaHostRegister)";
     EXPECT_EQ(p, f == 1 ? 0 : 1) << what;
+    // Each buffer is registered once, on its own second upload: frames 2 and 3, or frames 1
+    // and 2 where frame 1's re-hash fell back (its re-upload is the second buffer's second; a
+    // device run met that), never again (QueryProfile::host_registrations).
+    const cuda::QueryProfile prof = cuda::lastQueryProfile();
+    registrations += prof.host_registrations;
+    if (f == 1) EXPECT_EQ(prof.host_registrations, prof.rehash_fallbacks > 0 ? 1 : 0) << what;
+    if (f == 2) EXPECT_EQ(prof.host_registrations, 1) << what;
+    if (f >= 3) EXPECT_EQ(registrations, 2) << what;
+    EXPECT_EQ(prof.host_register_ms > 0.0, prof.host_registrations > 0) << what;
     EXPECT_EQ(cuda::lastQueryProfile().commit_uploads, 0) << what;
     EXPECT_EQ(cuda::lastQueryProfile().topology_compares, 0) << what;
     EXPECT_EQ(cloth.hostPin().at(), cloth.mesh().vertices.data()) << what;

@@ -12,3 +12,26 @@ probe_build() {
     -o $bin > $bin-build.log 2>&1
   echo "probe build rc=$? $(date +%T)" >> $T
 }
+
+# forward_ab KNOB TAG ON OFF  session 49's forward probe ($W/fprobe) with KNOB=1 and KNOB=0 in
+#               turn: the 90k cloth (20 frames) in ON processes with 1 and OFF with 0
+#               ($OUT/fwd-90k-TAG<value>-<round>.txt), then the 250k cloth (12 frames) once each
+#               ($W/fwd-250k-TAG<value>.txt); rcs into $T. Session 49's call3.sh (KNOB
+#               KDET_FCL_CUDA_GRAPH_UPDATE, TAG u, 2 2) and session 50's (KDET_FCL_CUDA_PIN_VERTICES,
+#               pin, 3 2) ran these loops inline, moved here after them.
+forward_ab() {
+  local knob=$1 tag=$2 on=$3 off=$4 r v
+  for r in $(seq 1 $((on > off ? on : off))); do
+    for v in 1 0; do
+      { [ $v = 1 ] && [ $r -gt $on ]; } || { [ $v = 0 ] && [ $r -gt $off ]; } && continue
+      env $knob=$v FRAMES=20 timeout 60 $W/fprobe cloth-90k 2>&1 | grep -v "^kdet_bench:" \
+        > $OUT/fwd-90k-$tag$v-$r.txt
+      echo "forward 90k $knob=$v $r rc=${PIPESTATUS[0]} $(date +%T)" >> $T
+    done
+  done
+  for v in 1 0; do
+    env $knob=$v FRAMES=12 timeout 90 $W/fprobe cloth-250k 2>&1 | grep -v "^kdet_bench:" \
+      > $W/fwd-250k-$tag$v.txt
+    echo "forward 250k $knob=$v rc=${PIPESTATUS[0]} $(date +%T)" >> $T
+  done
+}

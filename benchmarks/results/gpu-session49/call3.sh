@@ -19,17 +19,6 @@ SAN="$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitize
 timeout 120 $SAN --tool memcheck build-gpu/tests/test_cuda_query \
   --gtest_filter='CudaQuery.ARehashGraphWhoseBuffersMoved*' > $W/memcheck.txt 2>&1
 echo "memcheck rc=$? $(date +%T): $(grep 'ERROR SUMMARY' $W/memcheck.txt)" >> $T
-for r in 1 2; do
-  for u in 1 0; do
-    KDET_FCL_CUDA_GRAPH_UPDATE=$u FRAMES=20 timeout 60 $W/fprobe cloth-90k 2>&1 \
-      | grep -v "^kdet_bench:" > $OUT/fwd-90k-u$u-$r.txt
-    echo "forward 90k update=$u $r rc=${PIPESTATUS[0]} $(date +%T)" >> $T
-  done
-done
-for u in 1 0; do
-  KDET_FCL_CUDA_GRAPH_UPDATE=$u FRAMES=12 timeout 90 $W/fprobe cloth-250k 2>&1 \
-    | grep -v "^kdet_bench:" > $W/fwd-250k-u$u.txt
-  echo "forward 250k update=$u rc=${PIPESTATUS[0]} $(date +%T)" >> $T
-done
+forward_ab KDET_FCL_CUDA_GRAPH_UPDATE u 2 2  # (inline in the run)
 date >> $T
 tar czf $OUT/out.tgz -C $W --exclude=fprobe .
