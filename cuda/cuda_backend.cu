@@ -2193,6 +2193,11 @@ inline std::size_t upperWords(std::size_t nt) { return (nt + 1) / 2; }
 
 inline std::size_t roundUp(std::size_t x, std::size_t a) { return (x + a - 1) / a * a; }
 
+/// Host milliseconds since `t0` (QueryProfile's host times: graph captures, registrations).
+inline double hostMsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 /// The room a build with read-backs leaves in a mesh's entry and cell arrays after a re-hash
 /// without read-back outgrew them (CachedMesh::outgrown), as a share of what the build holds, on
 /// top of DeviceBuffer's 1/8: a mesh that outgrew its arrays by more than 1/8 in one frame is
@@ -2291,8 +2296,7 @@ bool uploadVertices(Context& ctx, Vec3<S>* dst, const HashedMesh<S>* owner,
       const auto t0 = std::chrono::steady_clock::now();
       pin.set(src, staging::pinHostMemory(src, bytes));
       ++ctx.profile.host_registrations;
-      ctx.profile.host_register_ms +=
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      ctx.profile.host_register_ms += hostMsSince(t0);
     }
     if (pin.pinned()) {
       CUDA_TRY(staging::pinnedUpload(dst, src, bytes, stage, ctx.stream));
@@ -2700,8 +2704,7 @@ void rehashFromGraph(Context& ctx, CachedMesh<S>& m, std::size_t nt) {
     }
     m.graph_key = key;
     ++ctx.profile.rehash_captures;
-    ctx.profile.rehash_capture_ms +=
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    ctx.profile.rehash_capture_ms += hostMsSince(t0);
   } else {
     // What buildOnDevice() records on the host besides the enqueued work.
     m.pending = true;
