@@ -11,6 +11,7 @@
 #endif
 
 #if KDET_FCL_HAVE_CUDA
+#include "../cuda/cuda_backend.h"
 #include "../cuda/device_info.h"
 #endif
 
@@ -79,6 +80,18 @@ std::string cudaDeviceDescription(int device) {
 }
 
 std::size_t autoCudaMinTriangles() { return kAutoCudaMinTriangles; }
+
+std::size_t cudaDeviceBytesInUse() {
+#if KDET_FCL_HAVE_CUDA
+  try {
+    return cudaDeviceCount() > 0 ? cuda::deviceBytesInUse() : 0;
+  } catch (...) {
+    return 0;
+  }
+#else
+  return 0;
+#endif
+}
 
 Backend resolveBackend(Backend requested, std::size_t work_triangles) {
   switch (requested) {

@@ -28,6 +28,12 @@ TEST(Backend, DeviceCountIsConsistent) {
   EXPECT_EQ(cudaDeviceCount(), count);  // stable within a process
 }
 
+TEST(Backend, NoDeviceMemoryWithoutADeviceOrBeforeAGpuQuery) {
+  // This test program runs no GPU query: nothing is held on a device, whatever the machine.
+  EXPECT_EQ(cudaDeviceBytesInUse(), 0u);
+  EXPECT_EQ(cudaDeviceBytesInUse(), 0u);  // asking allocates nothing
+}
+
 TEST(Backend, DescriptionNoneWithoutDevice) {
   const int count = cudaDeviceCount();
   EXPECT_EQ(cudaDeviceDescription(count), "none");  // one past the last device

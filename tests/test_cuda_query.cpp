@@ -695,6 +695,32 @@ TEST(CudaQuery, TwoClothBallFramesAsOneTakeOneRoundUnder256BytesPerTriangle) {
 #endif
 }
 
+// kdet_fcl::cudaDeviceBytesInUse() (backend.h, public) is the backend's own count: what a GPU
+// query leaves on the device (the mesh's arrays and hash, the scratch), more for a second mesh
+// kept beside the first, and next to nothing after releaseDeviceMemory (a device run found 176
+// bytes of the backend's smallest buffers left there).
+TEST(CudaQuery, DeviceBytesInUseIsWhatTheBackendHolds) {
+  KDET_SKIP_WITHOUT_DEVICE();
+#if KDET_FCL_TEST_HAVE_CUDA
+  constexpr std::size_t kReleased = 4096;  // at most this much is left after a release
+  cuda::releaseDeviceMemory();
+  EXPECT_LT(cudaDeviceBytesInUse(), kReleased);
+  EXPECT_EQ(cudaDeviceBytesInUse(), cuda::deviceBytesInUse());
+  HashedMesh<float> cloth(makeDrapedCloth<float>(60, 4.0f, 1.0f, 0.03f, 0.5f));
+  expectSameSelf(cloth, "cloth self");
+  const std::size_t one = cudaDeviceBytesInUse();
+  EXPECT_EQ(one, cuda::deviceBytesInUse());
+  // At least the cloth's vertices and triangles, which stay on the device.
+  EXPECT_GE(one, cloth.numVertices() * sizeof(Vec3<float>) +
+                     cloth.numTriangles() * 3 * sizeof(std::uint32_t));
+  HashedMesh<float> sphere(makeSphere<float>({0, 0, 0}, 1.0f, 64, 32));
+  expectSameSelf(sphere, "sphere self");
+  EXPECT_GT(cudaDeviceBytesInUse(), one);  // both meshes kept
+  cuda::releaseDeviceMemory();
+  EXPECT_LT(cudaDeviceBytesInUse(), kReleased);
+#endif
+}
+
 TEST(CudaQuery, DeformationAndTopologyChangesAreSeen) {
   KDET_SKIP_WITHOUT_DEVICE();
   HashedMesh<double> cloth(makeDrapedCloth<double>(60, 4.0, 1.0, 0.03, 0.0));

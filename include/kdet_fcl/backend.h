@@ -36,6 +36,12 @@ std::string cudaDeviceDescription(int device = 0);
 ///    error text). CUDA failures during a query throw CudaError with the CUDA error text.
 Backend resolveBackend(Backend requested, std::size_t work_triangles = 0);
 
+/// Bytes of device memory the CUDA backend holds now: the meshes it keeps on the device (their
+/// vertices, triangles and hashes, kept between queries) and its scratch buffers. 0 when the
+/// library was built without CUDA, when there is no usable device, or before the first GPU
+/// query. Never throws.
+std::size_t cudaDeviceBytesInUse();
+
 /// The smallest query (triangles of both meshes together) that Backend::Auto sends to the GPU:
 /// the measured break-even against the CPU backend (benchmarks/RESULTS-gpu.md).
 std::size_t autoCudaMinTriangles();

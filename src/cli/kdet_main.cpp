@@ -1,6 +1,7 @@
 /// \file
 /// The `kdet` command-line tool: a built-in demo scene, mesh-mesh and self collision queries on
-/// mesh files, and the k-free analysis.
+/// mesh files (on the CPU or, with --backend, the GPU), the k-free analysis, and what this build
+/// and machine offer (info).
 ///
 /// Exit codes: 0 success, 1 an error (unreadable file, invalid mesh, library error), 2 a usage
 /// error (unknown option, missing argument, bad number). Every error is one line on stderr.
@@ -22,6 +23,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "kdet_fcl/backend.h"
 #include "kdet_fcl/errors.h"
 #include "kdet_fcl/hashed_mesh.h"
 #include "kdet_fcl/kfree.h"
@@ -68,6 +70,7 @@ const char* kMainHelp =
     "  collide    intersecting triangle pairs between two mesh files\n"
     "  self       self-intersecting triangle pairs of one mesh file\n"
     "  analyze    the k-free analysis (kDet paper, Definition 3.1) of mesh files\n"
+    "  info       the version, whether this build has the CUDA backend, and the CUDA devices\n"
     "\n"
     "  kdet COMMAND --help   options of one command\n"
     "  kdet --version        the version\n"
@@ -76,7 +79,7 @@ const char* kMainHelp =
     "Exit codes: 0 success, 1 error, 2 usage error.\n";
 
 const char* kDemoHelp =
-    "usage: kdet demo [--n N] [--threads T] [--frames F] [--double|--float]\n"
+    "usage: kdet demo [--n N] [--threads T] [--frames F] [--backend B] [--double|--float]\n"
     "\n"
     "A cloth of N x N quads (2 N^2 triangles) draped over a sphere, both procedural (no data\n"
     "files). Prints triangle counts, hierarchy statistics, the cloth-sphere, cloth-self and\n"
@@ -85,8 +88,13 @@ const char* kDemoHelp =
     "  --n N         cloth resolution (default 224: about 100k triangles)\n"
     "  --threads T   worker threads (default 0: all hardware threads)\n"
     "  --frames F    animate the drape over F frames, re-hashing the cloth each frame (default 1)\n"
+    "  --backend B   cpu (default), cuda (the GPU; an error without one) or auto (the GPU when\n"
+    "                there is one and the scene is large enough to pay)\n"
     "  --double      double precision (default)\n"
-    "  --float       single precision\n";
+    "  --float       single precision\n"
+    "\n"
+    "On the GPU the hashes are built on the device, inside the first query, whose time also\n"
+    "holds the device's start-up; each later frame's query holds the cloth's re-hash.\n";
 
 const char* kCollideHelp =
     "usage: kdet collide A B [OPTIONS]\n"
@@ -102,6 +110,8 @@ const char* kCollideHelp =
     "  --pose-b X Y Z AX AY AZ DEG  translation and rotation of B at once\n"
     "  --max-pairs N                stop after N pairs (0: all; 1: a yes/no query)\n"
     "  --threads T                  worker threads (0: all)\n"
+    "  --backend B                  cpu (default), cuda (the GPU) or auto (the GPU when\n"
+    "                               there is one and the meshes are large enough to pay)\n"
     "  --pairs FILE                 write the pairs, sorted, one 'i j' per line, to FILE\n"
     "  --print-pairs                print the pairs, sorted, to stdout\n"
     "  --double | --float           precision (default double)\n";
@@ -113,6 +123,8 @@ const char* kSelfHelp =
     "\n"
     "  --max-pairs N        stop after N pairs (0: all)\n"
     "  --threads T          worker threads (0: all)\n"
+    "  --backend B          cpu (default), cuda (the GPU) or auto (the GPU when there is one\n"
+    "                       and the mesh is large enough to pay)\n"
     "  --pairs FILE         write the pairs, sorted, one 'i j' per line, to FILE\n"
     "  --print-pairs        print the pairs, sorted, to stdout\n"
     "  --double | --float   precision (default double)\n";
@@ -128,6 +140,12 @@ const char* kAnalyzeHelp =
     "  --csv FILE    also write the table as CSV to FILE\n"
     "  --threads T   worker threads (0: all)\n"
     "  --quiet       no progress output\n";
+
+const char* kInfoHelp =
+    "usage: kdet info\n"
+    "\n"
+    "The version, whether this build has the CUDA backend, the usable CUDA devices (the library\n"
+    "uses device 0), and the smallest query --backend auto sends to the GPU.\n";
 
 // ---------------------------------------------------------------------------------------------
 // Argument parsing.
@@ -208,6 +226,7 @@ struct PoseArg {
 struct Common {
   bool use_float = false;
   int threads = 0;
+  Backend backend = Backend::Cpu;
   bool help = false;
 
   /// Consumes a common option; false when `opt` is none of them.
@@ -220,9 +239,18 @@ struct Common {
       threads = static_cast<int>(a.integer(opt, 0, 4096));
     else if (opt == "--help" || opt == "-h")
       help = true;
+    else if (opt == "--backend")
+      backend = parseBackend(a.value(opt), a);
     else
       return false;
     return true;
+  }
+  static Backend parseBackend(const std::string& v, const Args& a) {
+    if (v == "cpu") return Backend::Cpu;
+    if (v == "cuda") return Backend::Cuda;
+    if (v == "auto") return Backend::Auto;
+    throw UsageError(a.command() + ": option --backend: unknown backend '" + v +
+                     "' (cpu, cuda or auto)");
   }
   int resolvedThreads() const {
     if (threads > 0) return threads;
@@ -230,6 +258,26 @@ struct Common {
     return h ? static_cast<int>(h) : 1;
   }
 };
+
+/// Where a command's queries of `work` triangles (all meshes together) run for `c.backend`
+/// (resolveBackend), with its description for the report: "cpu, T threads" or
+/// "cuda, <device>". --backend cuda without a usable device is an error naming the option.
+struct RunsOn {
+  Backend backend = Backend::Cpu;
+  std::string text;
+  bool gpu() const { return backend == Backend::Cuda; }
+};
+RunsOn runsOn(const Common& c, std::size_t work) {
+  RunsOn r;
+  try {
+    r.backend = resolveBackend(c.backend, work);
+  } catch (const BackendUnavailableError& e) {
+    throw BackendUnavailableError(std::string("--backend cuda: ") + e.what());
+  }
+  r.text = r.gpu() ? "cuda, " + cudaDeviceDescription(0)
+                   : "cpu, " + std::to_string(c.resolvedThreads()) + " threads";
+  return r;
+}
 
 void writePairs(const std::vector<TrianglePair>& sorted_pairs, const std::string& file,
                 bool print) {
@@ -273,14 +321,15 @@ int runDemo(const DemoOptions& o) {
   const int segments = std::max(16, std::min(512, o.n / 2));
   const int rings = std::max(8, segments / 2);
 
-  std::printf("kdet demo: cloth (%dx%d quads) draped over a sphere, %s precision, %d threads\n",
-              o.n, o.n, precisionName(std::is_same<S, float>::value), o.common.resolvedThreads());
   auto t0 = Clock::now();
   TriangleMesh<S> sphere_mesh = makeSphere<S>(Vec3<S>{0, 0, 0}, sphere_radius, segments, rings);
   const S t_first = o.frames > 1 ? S(0) : S(1);
   TriangleMesh<S> cloth_mesh =
       makeDrapedCloth<S>(o.n, cloth_size, sphere_radius, penetration, t_first);
   const double gen_ms = msSince(t0);
+  const RunsOn on = runsOn(o.common, cloth_mesh.triangles.size() + sphere_mesh.triangles.size());
+  std::printf("kdet demo: cloth (%dx%d quads) draped over a sphere, %s precision, %s\n", o.n, o.n,
+              precisionName(std::is_same<S, float>::value), on.text.c_str());
   std::printf("  cloth:  %zu triangles, %zu vertices\n  sphere: %zu triangles, %zu vertices\n",
               cloth_mesh.triangles.size(), cloth_mesh.vertices.size(), sphere_mesh.triangles.size(),
               sphere_mesh.vertices.size());
@@ -288,18 +337,26 @@ int runDemo(const DemoOptions& o) {
 
   t0 = Clock::now();
   HashedMesh<S> sphere(std::move(sphere_mesh), Transform<S>::identity(), threads);
-  sphere.prepareCpuHash();  // the hash is built lazily; build it here so that it is timed
+  // The CPU hash is built lazily; build it here so that it is timed. On the GPU the device
+  // builds its own inside the first query, and no CPU hash is made.
+  if (!on.gpu()) sphere.prepareCpuHash();
   const double build_sphere_ms = msSince(t0);
   t0 = Clock::now();
   HashedMesh<S> cloth(std::move(cloth_mesh), Transform<S>::identity(), threads);
-  cloth.prepareCpuHash();
+  if (!on.gpu()) cloth.prepareCpuHash();
   const double build_cloth_ms = msSince(t0);
-  printHierarchy("cloth:", cloth.stats());
-  printHierarchy("sphere:", sphere.stats());
-  std::printf("  build/hash: cloth %.2f ms, sphere %.2f ms\n", build_cloth_ms, build_sphere_ms);
+  if (on.gpu()) {
+    std::printf("  build/hash: on the device, inside the first queries (which also hold the "
+                "device's start-up)\n");
+  } else {
+    printHierarchy("cloth:", cloth.stats());
+    printHierarchy("sphere:", sphere.stats());
+    std::printf("  build/hash: cloth %.2f ms, sphere %.2f ms\n", build_cloth_ms, build_sphere_ms);
+  }
 
   QueryOptions q;
   q.threads = threads;
+  q.backend = on.backend;
   t0 = Clock::now();
   const QueryResult sphere_self = intersectSelf(sphere, q);
   const double sphere_self_ms = msSince(t0);
@@ -312,7 +369,9 @@ int runDemo(const DemoOptions& o) {
           makeDrapedCloth<S>(o.n, cloth_size, sphere_radius, penetration, time);
       t0 = Clock::now();
       cloth.updateVertices(next.vertices);
-      cloth.prepareCpuHash();  // the re-hash is lazy: run it here so that it is timed as such
+      // The re-hash is lazy: on the CPU run it here so that it is timed as such; the GPU
+      // re-hashes on the device, inside the next query.
+      if (!on.gpu()) cloth.prepareCpuHash();
       update_ms = msSince(t0);
     }
     t0 = Clock::now();
@@ -321,14 +380,20 @@ int runDemo(const DemoOptions& o) {
     t0 = Clock::now();
     const QueryResult cc = intersectSelf(cloth, q);
     const double cc_ms = msSince(t0);
-    if (o.frames > 1)
-      std::printf("  frame %d/%d (t=%.3f)%s\n", f + 1, o.frames, double(time),
-                  f > 0 ? (" re-hash " + std::to_string(update_ms) + " ms").c_str() : "");
+    if (o.frames > 1) {
+      char update[96] = "";
+      if (f > 0)
+        std::snprintf(update, sizeof update, " %s %.2f ms%s", on.gpu() ? "update" : "re-hash",
+                      update_ms, on.gpu() ? " (the re-hash is in the next query)" : "");
+      std::printf("  frame %d/%d (t=%.3f)%s\n", f + 1, o.frames, double(time), update);
+    }
     std::printf("  cloth-sphere pairs: %zu (query %.2f ms)\n", cs.pairs.size(), cs_ms);
     std::printf("  cloth self pairs:   %zu (query %.2f ms)\n", cc.pairs.size(), cc_ms);
   }
-  std::printf("  sphere self pairs:  %zu (query %.2f ms)\n", sphere_self.pairs.size(),
-              sphere_self_ms);
+  std::printf("  sphere self pairs:  %zu (query %.2f ms%s)\n", sphere_self.pairs.size(),
+              sphere_self_ms, on.gpu() ? ", the first query: with the device's start-up" : "");
+  if (on.gpu()) std::fputs("  ", stdout);
+  printDeviceMemory(stdout, on, cloth.numTriangles() + sphere.numTriangles());
   return 0;
 }
 
@@ -400,6 +465,28 @@ void parseQueryOptions(Args& a, QueryCliOptions& o, bool with_poses) {
     throw UsageError(a.command() + ": --pairs and --print-pairs exclude each other");
 }
 
+/// On the GPU: the device memory the backend holds for `triangles` (cudaDeviceBytesInUse).
+void printDeviceMemory(FILE* info, const RunsOn& on, std::size_t triangles) {
+  if (!on.gpu()) return;
+  const double bytes = double(cudaDeviceBytesInUse());
+  std::fprintf(info, "device memory: %.2f MiB (%.0f B per triangle)\n", bytes / (1024.0 * 1024.0),
+               triangles > 0 ? bytes / double(triangles) : 0.0);
+}
+
+/// The time line of collide and self. On the GPU the hash is built on the device inside the
+/// query, whose time then also holds the device's start-up (a one-shot command pays both).
+void printTimes(FILE* info, double read_ms, double build_ms, double query_ms, const char* precision,
+                const RunsOn& on) {
+  if (on.gpu())
+    std::fprintf(info,
+                 "time: read %.2f ms, query %.2f ms with the device's start-up and its build/hash "
+                 "(%s, %s)\n",
+                 read_ms, query_ms, precision, on.text.c_str());
+  else
+    std::fprintf(info, "time: read %.2f ms, build/hash %.2f ms, query %.2f ms (%s, %s)\n", read_ms,
+                 build_ms, query_ms, precision, on.text.c_str());
+}
+
 template <class S>
 int runCollide(const QueryCliOptions& o) {
   auto t0 = Clock::now();
@@ -407,14 +494,18 @@ int runCollide(const QueryCliOptions& o) {
   TriangleMesh<S> mb = readMesh<S>(o.files[1]);
   const double read_ms = msSince(t0);
   const std::size_t na = ma.triangles.size(), nb = mb.triangles.size();
+  const RunsOn on = runsOn(o.common, na + nb);
   t0 = Clock::now();
   HashedMesh<S> a(std::move(ma), o.pose_a.get<S>(), o.common.threads);
   HashedMesh<S> b(std::move(mb), o.pose_b.get<S>(), o.common.threads);
-  a.prepareCpuHash();  // built lazily otherwise (inside the query)
-  b.prepareCpuHash();
+  if (!on.gpu()) {  // built lazily otherwise (inside the query; on the GPU, on the device)
+    a.prepareCpuHash();
+    b.prepareCpuHash();
+  }
   const double build_ms = msSince(t0);
   QueryOptions q;
   q.threads = o.common.threads;
+  q.backend = on.backend;
   q.max_pairs = static_cast<std::size_t>(o.max_pairs);
   t0 = Clock::now();
   QueryResult r = intersectMeshes(a, b, q);
@@ -426,9 +517,8 @@ int runCollide(const QueryCliOptions& o) {
                o.files[1].c_str(), nb);
   std::fprintf(info, "pairs: %zu%s\n", r.pairs.size(),
                r.complete ? "" : " (stopped at --max-pairs)");
-  std::fprintf(info, "time: read %.2f ms, build/hash %.2f ms, query %.2f ms (%s, %d threads)\n",
-               read_ms, build_ms, query_ms, precisionName(std::is_same<S, float>::value),
-               o.common.resolvedThreads());
+  printTimes(info, read_ms, build_ms, query_ms, precisionName(std::is_same<S, float>::value), on);
+  printDeviceMemory(info, on, na + nb);
   writePairs(r.pairs, o.pairs_file, o.print_pairs);
   return 0;
 }
@@ -439,12 +529,14 @@ int runSelf(const QueryCliOptions& o) {
   TriangleMesh<S> m = readMesh<S>(o.files[0]);
   const double read_ms = msSince(t0);
   const std::size_t n = m.triangles.size();
+  const RunsOn on = runsOn(o.common, n);
   t0 = Clock::now();
   HashedMesh<S> h(std::move(m), Transform<S>::identity(), o.common.threads);
-  h.prepareCpuHash();  // built lazily otherwise (inside the query)
+  if (!on.gpu()) h.prepareCpuHash();  // built lazily otherwise (inside the query)
   const double build_ms = msSince(t0);
   QueryOptions q;
   q.threads = o.common.threads;
+  q.backend = on.backend;
   q.max_pairs = static_cast<std::size_t>(o.max_pairs);
   t0 = Clock::now();
   QueryResult r = intersectSelf(h, q);
@@ -454,9 +546,8 @@ int runSelf(const QueryCliOptions& o) {
   std::fprintf(info, "mesh: %s (%zu triangles)\n", o.files[0].c_str(), n);
   std::fprintf(info, "self pairs: %zu%s\n", r.pairs.size(),
                r.complete ? "" : " (stopped at --max-pairs)");
-  std::fprintf(info, "time: read %.2f ms, build/hash %.2f ms, query %.2f ms (%s, %d threads)\n",
-               read_ms, build_ms, query_ms, precisionName(std::is_same<S, float>::value),
-               o.common.resolvedThreads());
+  printTimes(info, read_ms, build_ms, query_ms, precisionName(std::is_same<S, float>::value), on);
+  printDeviceMemory(info, on, n);
   writePairs(r.pairs, o.pairs_file, o.print_pairs);
   return 0;
 }
@@ -579,6 +670,33 @@ int cmdAnalyze(Args& a) {
   return o.common.use_float ? runAnalyze<float>(o) : runAnalyze<double>(o);
 }
 
+// ---------------------------------------------------------------------------------------------
+// info
+
+int cmdInfo(Args& a) {
+  while (!a.done()) {
+    const std::string opt = a.take();
+    if (opt == "--help" || opt == "-h") {
+      std::fputs(kInfoHelp, stdout);
+      return 0;
+    }
+    if (isOption(opt)) a.unknown(opt);
+    throw UsageError("info: unexpected argument '" + opt + "' (see kdet info --help)");
+  }
+  std::printf("kdet %s\n", KDET_FCL_VERSION_STRING);
+  std::printf("CUDA backend: %s\n", builtWithCuda() ? "built" : "not built (no nvcc at build time)");
+  const int devices = cudaDeviceCount();
+  std::printf("CUDA devices: %d\n", devices);
+  for (int d = 0; d < devices; ++d)
+    std::printf("  device %d: %s%s\n", d, cudaDeviceDescription(d).c_str(),
+                d == 0 ? " (used)" : "");
+  std::printf("--backend auto: the GPU from %zu triangles%s\n", autoCudaMinTriangles(),
+              devices > 0 ? "" : " (no device here: always the CPU)");
+  const unsigned h = std::thread::hardware_concurrency();
+  std::printf("CPU threads: %u\n", h ? h : 1u);
+  return 0;
+}
+
 int run(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
   std::string cmd = "demo";
@@ -606,6 +724,7 @@ int run(int argc, char** argv) {
   if (cmd == "collide") return cmdCollide(a);
   if (cmd == "self") return cmdSelf(a);
   if (cmd == "analyze" || cmd == "analyse") return cmdAnalyze(a);
+  if (cmd == "info") return cmdInfo(a);
   throw UsageError("unknown command '" + cmd + "' (see kdet --help)");
 }
 
