@@ -15,7 +15,8 @@
 #   KDET_FCL_DATA_DIR  test/benchmark data (default: .gpu-data when it exists: a copy of the
 #               needed ../shared/data files, since an offline GPU machine has no ../shared)
 #   GPU_BENCH   1: also run the GPU benchmark (benchmarks/gpu_bench; log and CSV in OUT)
-#   TARGETS     build only these targets (space-separated; default: everything)
+#   TARGETS     build only these targets (space-separated; default: everything). ctest -L cuda
+#               also runs cli_backend (the kdet tool's --backend cuda), so kdet is added to them
 #   CTEST_ALL   0: skip the run of the whole suite after the CUDA label (default 1)
 #   SANITIZER   1: also run compute-sanitizer memcheck and racecheck on small CUDA test scenes
 #               (queries, an overflow, 128-bit keys, both scans, the commit's and update's copies,
@@ -105,6 +106,8 @@ cmake_args=(
 # shellcheck disable=SC2206
 extra=(${CMAKE_ARGS})
 
+# (ctest -L cuda runs cli_backend, the kdet tool on the GPU.)
+if [[ -n "${TARGETS:-}" && " $TARGETS " != *" kdet "* ]]; then TARGETS="$TARGETS kdet"; fi
 log "configuring and building $BUILD_DIR (log: $OUT/build.log)"
 {
   echo "LD_LIBRARY_PATH=$LD_LIBRARY_PATH"
