@@ -3311,18 +3311,19 @@ TEST(CudaQuery, ARehashGraphWhoseBuffersMovedIsCapturedAgain) {
   cuda::releaseDeviceMemory();  // (no earlier entry's larger arrays at the cloth's address)
   cuda::setProfiling(true);
   HashedMesh<double> cloth(makeDrapedCloth<double>(50, 4.0, 1.0, 0.03, 0.8));
+  // The cloth re-hashed and queried (its pairs the CPU's), and that query's profile.
+  auto rehash = [&](const char* what) {
+    cuda::markDeformed(cloth);
+    expectSameSelf(cloth, what);
+    return cuda::lastQueryProfile();
+  };
   expectSameSelf(cloth, "first build");
-  cuda::markDeformed(cloth);
-  expectSameSelf(cloth, "first re-hash");
-  cuda::QueryProfile p = cuda::lastQueryProfile();
+  cuda::QueryProfile p = rehash("first re-hash");
   EXPECT_EQ(p.rehash_graphs, 1) << "first re-hash";
   EXPECT_EQ(p.rehash_captures, 1) << "first re-hash: its graph is new";
   EXPECT_GT(p.rehash_capture_ms, 0.0) << "first re-hash";
-  cuda::markDeformed(cloth);  // (a query's scratch may still grow to its forecasts here)
-  expectSameSelf(cloth, "second re-hash");
-  cuda::markDeformed(cloth);
-  expectSameSelf(cloth, "same sizes and buffers");
-  p = cuda::lastQueryProfile();
+  rehash("second re-hash");  // (a query's scratch may still grow to its forecasts here)
+  p = rehash("same sizes and buffers");
   EXPECT_EQ(p.rehash_graphs, 1) << "same sizes and buffers";
   EXPECT_EQ(p.rehash_captures, 0) << "same sizes and buffers: replayed";
   EXPECT_EQ(p.rehash_capture_ms, 0.0) << "same sizes and buffers";
@@ -3335,9 +3336,7 @@ TEST(CudaQuery, ARehashGraphWhoseBuffersMovedIsCapturedAgain) {
     ASSERT_GT(p.candidates, 4 * cloth_cands) << "the soup needs more scratch";
     EXPECT_GT(p.device_allocations, 0) << "crowded soup";
   }
-  cuda::markDeformed(cloth);
-  expectSameSelf(cloth, "after the crowded soup");
-  p = cuda::lastQueryProfile();
+  p = rehash("after the crowded soup");
   EXPECT_EQ(p.rehash_graphs, 1) << "after the crowded soup";
   EXPECT_EQ(p.rehash_captures, 1) << "after the crowded soup: its buffers moved";
   EXPECT_EQ(p.rehash_fallbacks, 0) << "after the crowded soup";

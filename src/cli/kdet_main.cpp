@@ -279,6 +279,16 @@ RunsOn runsOn(const Common& c, std::size_t work) {
   return r;
 }
 
+/// On the GPU: the device memory the backend holds for `triangles` (cudaDeviceBytesInUse), the
+/// line led by `indent`.
+void printDeviceMemory(FILE* info, const RunsOn& on, std::size_t triangles,
+                       const char* indent = "") {
+  if (!on.gpu()) return;
+  const double bytes = double(cudaDeviceBytesInUse());
+  std::fprintf(info, "%sdevice memory: %.2f MiB (%.0f B per triangle)\n", indent,
+               bytes / (1024.0 * 1024.0), triangles > 0 ? bytes / double(triangles) : 0.0);
+}
+
 void writePairs(const std::vector<TrianglePair>& sorted_pairs, const std::string& file,
                 bool print) {
   if (!file.empty()) {
@@ -392,8 +402,7 @@ int runDemo(const DemoOptions& o) {
   }
   std::printf("  sphere self pairs:  %zu (query %.2f ms%s)\n", sphere_self.pairs.size(),
               sphere_self_ms, on.gpu() ? ", the first query: with the device's start-up" : "");
-  if (on.gpu()) std::fputs("  ", stdout);
-  printDeviceMemory(stdout, on, cloth.numTriangles() + sphere.numTriangles());
+  printDeviceMemory(stdout, on, cloth.numTriangles() + sphere.numTriangles(), "  ");
   return 0;
 }
 
@@ -463,14 +472,6 @@ void parseQueryOptions(Args& a, QueryCliOptions& o, bool with_poses) {
   }
   if (!o.pairs_file.empty() && o.print_pairs)
     throw UsageError(a.command() + ": --pairs and --print-pairs exclude each other");
-}
-
-/// On the GPU: the device memory the backend holds for `triangles` (cudaDeviceBytesInUse).
-void printDeviceMemory(FILE* info, const RunsOn& on, std::size_t triangles) {
-  if (!on.gpu()) return;
-  const double bytes = double(cudaDeviceBytesInUse());
-  std::fprintf(info, "device memory: %.2f MiB (%.0f B per triangle)\n", bytes / (1024.0 * 1024.0),
-               triangles > 0 ? bytes / double(triangles) : 0.0);
 }
 
 /// The time line of collide and self. On the GPU the hash is built on the device inside the

@@ -35,3 +35,33 @@ forward_ab() {
     echo "forward 250k $knob=$v rc=${PIPESTATUS[0]} $(date +%T)" >> $T
   done
 }
+
+# forward_probe_build [DIFF...]  session 49's forward_probe.cpp copied to $W, the DIFFs applied to
+#               it in turn (log $W/patch.log, rc into $T), built by probe_build into $W/fprobe.
+#               Session 50's call3.sh (its forward_probe.diff) and session 51's call1.sh and
+#               call5.sh (session 50's diff, then their own) ran these lines inline, moved here
+#               after them.
+forward_probe_build() {
+  local d ok=0
+  cp benchmarks/results/gpu-session49/forward_probe.cpp $W/forward_probe.cpp
+  for d in "$@"; do
+    (cd $W && git apply -p0 $OLDPWD/$d) >> $W/patch.log 2>&1 || ok=1
+  done
+  echo "forward_probe diffs applied rc=$ok $(date +%T)" >> $T
+  probe_build $W/forward_probe.cpp $W/fprobe
+}
+
+# forward_runs KNOB TAG SCENE FRAMES ROUNDS LIMIT  $W/fprobe on SCENE (FRAMES frames), ROUNDS
+#               rounds of one process with KNOB=1 and one with KNOB=0, each under `timeout LIMIT`,
+#               into $W/fwd-<SCENE less "cloth-">-TAG<value>-<round>.txt; rcs into $T. Session 51's
+#               call5.sh ran these loops inline, moved here after it.
+forward_runs() {
+  local knob=$1 tag=$2 scene=$3 frames=$4 rounds=$5 limit=$6 r v
+  for r in $(seq $rounds); do
+    for v in 1 0; do
+      env $knob=$v FRAMES=$frames timeout $limit $W/fprobe $scene 2>&1 | grep -v "^kdet_bench:" \
+        > $W/fwd-${scene#cloth-}-$tag$v-$r.txt
+      echo "forward ${scene#cloth-} $tag=$v $r rc=${PIPESTATUS[0]} $(date +%T)" >> $T
+    done
+  done
+}

@@ -14,10 +14,7 @@ cd "$(dirname "$0")/../../.."
 W=/tmp/s50
 ab_configure $W
 ab_targets kdet_fcl test_cuda_query
-cp benchmarks/results/gpu-session49/forward_probe.cpp $W/forward_probe.cpp
-(cd $W && git apply -p0 $OLDPWD/benchmarks/results/gpu-session50/forward_probe.diff) > $W/patch.log 2>&1
-echo "forward_probe.diff applied rc=$? $(date +%T)" >> $T
-probe_build $W/forward_probe.cpp $W/fprobe
+forward_probe_build benchmarks/results/gpu-session50/forward_probe.diff  # (inline in the run)
 ab_gtest pin 'CudaQuery.LargeVertexArraysAreCopiedStraight*:CudaQuery.CommittedVerticesAreUploaded*:CudaQuery.ACommitCopies*'
 grep -E "Failure|Which is|Expected|actual" $W/test-pin.txt | head -40 >> $T
 forward_ab KDET_FCL_CUDA_PIN_VERTICES pin 3 2  # (inline in the run)

@@ -19,11 +19,8 @@ cd "$(dirname "$0")/../../.."
 W=/tmp/s51
 ab_configure $W
 ab_targets kdet_fcl test_cuda_query gpu_bench
-cp benchmarks/results/gpu-session49/forward_probe.cpp $W/forward_probe.cpp
-(cd $W && git apply -p0 $OLDPWD/benchmarks/results/gpu-session50/forward_probe.diff &&
-   git apply -p0 $OLDPWD/benchmarks/results/gpu-session51/forward_probe.diff) > $W/patch.log 2>&1
-echo "forward_probe diffs applied rc=$? $(date +%T)" >> $T
-probe_build $W/forward_probe.cpp $W/fprobe
+forward_probe_build benchmarks/results/gpu-session50/forward_probe.diff \
+  benchmarks/results/gpu-session51/forward_probe.diff  # (inline in the run)
 PIN='CudaQuery.LargeVertexArraysAreCopiedStraight*:CudaQuery.CommittedVerticesAreUploaded*'
 PIN="$PIN:CudaQuery.ABackgroundRegistration*:CudaQuery.ACommitCopies*:CudaQuery.UpdateVerticesCopies*"
 for r in 1 2 3 4 5; do

@@ -16,11 +16,8 @@ cd "$(dirname "$0")/../../.."
 W=/tmp/s51e
 ab_configure $W
 ab_targets kdet_fcl test_cuda_query
-cp benchmarks/results/gpu-session49/forward_probe.cpp $W/forward_probe.cpp
-(cd $W && git apply -p0 $OLDPWD/benchmarks/results/gpu-session50/forward_probe.diff &&
-   git apply -p0 $OLDPWD/benchmarks/results/gpu-session51/forward_probe_defer.diff) > $W/patch.log 2>&1
-echo "forward_probe diffs applied rc=$? $(date +%T)" >> $T
-probe_build $W/forward_probe.cpp $W/fprobe
+forward_probe_build benchmarks/results/gpu-session50/forward_probe.diff \
+  benchmarks/results/gpu-session51/forward_probe_defer.diff  # (inline in the run)
 PIN='CudaQuery.LargeVertexArraysAreCopiedStraight*:CudaQuery.CommittedVerticesAreUploaded*'
 PIN="$PIN:CudaQuery.ACommitCopies*:CudaQuery.UpdateVerticesCopies*:CudaQuery.EveryKnob*"
 for r in 1 2 3; do
@@ -34,20 +31,8 @@ timeout 200 /usr/local/cuda/bin/compute-sanitizer --tool memcheck build-gpu/test
   > $W/memcheck.txt 2>&1
 echo "memcheck rc=$? $(date +%T)" >> $T
 grep -E "ERROR SUMMARY|PASSED|FAILED" $W/memcheck.txt >> $T
-for r in 1 2 3 4; do
-  for v in 1 0; do
-    KDET_FCL_CUDA_PIN_DEFER=$v FRAMES=20 timeout 60 $W/fprobe cloth-90k 2>&1 |
-      grep -v "^kdet_bench:" > $W/fwd-90k-defer$v-$r.txt
-    echo "forward 90k defer=$v $r rc=${PIPESTATUS[0]} $(date +%T)" >> $T
-  done
-done
-for r in 1 2; do
-  for v in 1 0; do
-    KDET_FCL_CUDA_PIN_DEFER=$v FRAMES=12 timeout 90 $W/fprobe cloth-250k 2>&1 |
-      grep -v "^kdet_bench:" > $W/fwd-250k-defer$v-$r.txt
-    echo "forward 250k defer=$v $r rc=${PIPESTATUS[0]} $(date +%T)" >> $T
-  done
-done
+forward_runs KDET_FCL_CUDA_PIN_DEFER defer cloth-90k 20 4 60  # (inline in the run)
+forward_runs KDET_FCL_CUDA_PIN_DEFER defer cloth-250k 12 2 90
 for f in $W/fwd-*.txt; do echo "== $(basename $f)"; sed -n 1,7p $f; grep "^pass" $f; done > $OUT/frames.txt
 date >> $T
 tar czf $OUT/out.tgz -C $W --exclude=fprobe --exclude=forward_probe.cpp --exclude='*.log' .
