@@ -16,7 +16,8 @@
 #               needed ../shared/data files, since an offline GPU machine has no ../shared)
 #   GPU_BENCH   1: also run the GPU benchmark (benchmarks/gpu_bench; log and CSV in OUT)
 #   TARGETS     build only these targets (space-separated; default: everything). ctest -L cuda
-#               also runs cli_backend (the kdet tool's --backend cuda), so kdet is added to them
+#               also runs cli_backend (the kdet tool's --backend cuda) and interpose_cuda (an
+#               unmodified FCL program on the GPU), so their targets are added to them
 #   CTEST_ALL   0: skip the run of the whole suite after the CUDA label (default 1)
 #   SANITIZER   1: also run compute-sanitizer memcheck and racecheck on small CUDA test scenes
 #               (queries, an overflow, 128-bit keys, both scans, the commit's and update's copies,
@@ -106,8 +107,12 @@ cmake_args=(
 # shellcheck disable=SC2206
 extra=(${CMAKE_ARGS})
 
-# (ctest -L cuda runs cli_backend, the kdet tool on the GPU.)
-if [[ -n "${TARGETS:-}" && " $TARGETS " != *" kdet "* ]]; then TARGETS="$TARGETS kdet"; fi
+# (ctest -L cuda runs cli_backend, the kdet tool on the GPU, and interpose_cuda.)
+if [[ -n "${TARGETS:-}" ]]; then
+  for t in kdet kdet_fcl_interpose example_unmodified_fcl; do
+    if [[ " $TARGETS " != *" $t "* ]]; then TARGETS="$TARGETS $t"; fi
+  done
+fi
 log "configuring and building $BUILD_DIR (log: $OUT/build.log)"
 {
   echo "LD_LIBRARY_PATH=$LD_LIBRARY_PATH"

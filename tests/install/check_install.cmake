@@ -64,6 +64,27 @@ if(NOT EXISTS "${prefix}/include/kdet_fcl/kdet_fcl.h")
   message(FATAL_ERROR "check_install: include/kdet_fcl/kdet_fcl.h was not installed")
 endif()
 
+# 2b. The installed interposer (when built) finds the installed library beside it and takes an
+#     unmodified FCL program's mixed-BV pair, which FCL alone refuses (tests/interpose_tests.cmake).
+if(INTERPOSE_APP)
+  file(GLOB_RECURSE shim "${prefix}/*/libkdet_fcl_interpose.so")
+  if(NOT shim)
+    message(FATAL_ERROR "check_install: libkdet_fcl_interpose.so was not installed")
+  endif()
+  list(GET shim 0 shim)
+  message(STATUS "check_install [interpose]: LD_PRELOAD=${shim} ${INTERPOSE_APP}")
+  set(asan "")
+  if(DEFINED ENV{ASAN_OPTIONS})
+    set(asan "ASAN_OPTIONS=$ENV{ASAN_OPTIONS}:verify_asan_link_order=0")
+  endif()
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env "LD_PRELOAD=${shim}" "KDET_FCL_INTERPOSE_STATS=1"
+                          ${asan} "${INTERPOSE_APP}"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "mixed 0: collision 1" OR NOT err MATCHES "kdet_fcl interpose: on")
+    message(FATAL_ERROR "check_install: the installed interposer did not run (exit ${rc}):\n${out}\n${err}")
+  endif()
+endif()
+
 # 3. Configure the consumer against the prefix only (no package registry, no build tree).
 set(configure_args
   -S "${CONSUMER_SOURCE_DIR}" -B "${consumer_build}"
