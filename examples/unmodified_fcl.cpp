@@ -3,8 +3,10 @@
 // kDet (README "Unmodified FCL programs"). tests/interpose_tests.cmake compares the two runs.
 //
 //   example_unmodified_fcl            the checks: one line per query, pairs as counts and hashes
-//   example_unmodified_fcl bench [n]  times n checks (default 15) of a 80k-triangle sheet against
-//                                     a 20k-triangle sphere, rigid and deforming; medians in ms
+//   example_unmodified_fcl bench [n]  times n rounds (default 15): of the checks' small sphere and
+//                                     torus at their 12 poses (every pair; first contact), and of
+//                                     an 80k-triangle sheet against a 20k-triangle sphere, rigid
+//                                     and deforming; medians in ms
 //
 // Meshes are built here (a UV sphere, a torus, a wavy sheet); no data files.
 
@@ -117,6 +119,23 @@ int checks() {
     }
   }
 
+  // FCL's replace calls write the vertices in place (the model's arrays stay where they were).
+  {
+    auto ring_model = model<fcl::OBBRSSd>(ring);
+    fcl::CollisionObjectd r(ring_model, pose(4));
+    r.computeAABB();
+    fcl::CollisionResultd before, after;
+    fcl::collide(&a, &r, kAll, before);
+    printPairs("replaced", 0, before);
+    const Soup thin = torus(0.9, 0.15, 64, 24);
+    ring_model->beginReplaceModel();
+    for (const auto& p : thin.points) ring_model->replaceVertex(p);
+    ring_model->endReplaceModel();
+    r.computeAABB();
+    fcl::collide(&a, &r, kAll, after);
+    printPairs("replaced", 1, after);
+  }
+
   // A broadphase manager whose callback calls fcl::collide (as MoveIt's does).
   {
     std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
@@ -185,6 +204,32 @@ double median(std::vector<double> v) {
 }
 
 int bench(int n) {
+  // Small meshes, as a planner's links: the checks' sphere and torus at their 12 poses.
+  {
+    auto ball_model = model<fcl::OBBRSSd>(sphere(1.0, 48, 24));
+    auto ring_model = model<fcl::OBBRSSd>(torus(0.9, 0.3, 64, 24));
+    fcl::CollisionObjectd a(ball_model), b(ring_model);
+    std::vector<double> all_ms, first_ms;
+    for (int round = 0; round < n + 2; ++round)
+      for (int i = 0; i < 12; ++i) {
+        b.setTransform(pose(i));
+        b.computeAABB();
+        fcl::CollisionResultd all, first;
+        auto t0 = std::chrono::steady_clock::now();
+        fcl::collide(&a, &b, kAll, all);
+        auto t1 = std::chrono::steady_clock::now();
+        fcl::collide(&a, &b, fcl::CollisionRequestd(1, false), first);
+        if (round >= 2) {
+          all_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+          first_ms.push_back(msSince(t1));
+        }
+      }
+    std::printf("bench small: sphere %d and torus %d triangles, OBBRSS, 12 poses\n",
+                ball_model->num_tris, ring_model->num_tris);
+    std::printf("bench small every pair: median %.4f ms per check\n", median(all_ms));
+    std::printf("bench small first contact: median %.4f ms per check\n", median(first_ms));
+  }
+
   const int side = 200;  // 200 x 200 quads: 80,000 triangles
   Soup cloth = sheet(side, 0.0);
   auto cloth_model = model<fcl::OBBRSSd>(cloth);

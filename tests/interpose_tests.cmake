@@ -78,24 +78,28 @@ function(check_kdet prefix backend)
   if(NOT n EQUAL 1)
     message(FATAL_ERROR "${prefix}: ${n} fallback notices, expected 1:\n${err}")
   endif()
-  string(REGEX MATCH "on; backend ${backend}; fcl::collide calls ([0-9]+), mesh pairs by kDet ([0-9]+), forwarded to FCL ([0-9]+), fell back to FCL ([0-9]+); geometry destructor calls ([0-9]+); cache entries at exit ([0-9]+)" s "${err}")
+  string(REGEX MATCH "on; backend ${backend}; cache (checksum|trust); fcl::collide calls ([0-9]+), mesh pairs by kDet ([0-9]+), forwarded to FCL ([0-9]+), fell back to FCL ([0-9]+); geometry destructor calls ([0-9]+); cache entries at exit ([0-9]+)" s "${err}")
   if(NOT s)
     message(FATAL_ERROR "${prefix}: no statistics line for backend ${backend}:\n${err}")
   endif()
-  set(calls ${CMAKE_MATCH_1})
-  set(kdet ${CMAKE_MATCH_2})
-  set(forwarded ${CMAKE_MATCH_3})
-  set(fallbacks ${CMAKE_MATCH_4})
-  set(destroyed ${CMAKE_MATCH_5})
-  set(left ${CMAKE_MATCH_6})
-  # The program's mesh-mesh calls: 24 (objects, first) + 8 (geometries) + 4 (deforming) + 30
-  # (lifetime) + 1 (mixed) + the manager's mesh pairs; 2 shape calls at least go to FCL.
+  set(calls ${CMAKE_MATCH_2})
+  set(kdet ${CMAKE_MATCH_3})
+  set(forwarded ${CMAKE_MATCH_4})
+  set(fallbacks ${CMAKE_MATCH_5})
+  set(destroyed ${CMAKE_MATCH_6})
+  set(left ${CMAKE_MATCH_7})
+  if(NOT CMAKE_MATCH_1 STREQUAL "checksum")
+    message(FATAL_ERROR "${prefix}: cache ${CMAKE_MATCH_1}, expected checksum:\n${err}")
+  endif()
+  # The program's mesh-mesh calls: 24 (objects, first) + 8 (geometries) + 4 (deforming) + 2
+  # (replaced) + 30 (lifetime) + 1 (mixed) + the manager's mesh pairs; 2 shape calls at least go
+  # to FCL.
   math(EXPR sum "${kdet} + ${forwarded} + ${fallbacks}")
-  if(kdet LESS 67 OR forwarded LESS 2 OR NOT fallbacks EQUAL 1 OR NOT sum EQUAL calls)
+  if(kdet LESS 69 OR forwarded LESS 2 OR NOT fallbacks EQUAL 1 OR NOT sum EQUAL calls)
     message(FATAL_ERROR "${prefix}: calls ${calls}, kDet ${kdet}, forwarded ${forwarded}, fallbacks ${fallbacks}")
   endif()
-  # 66 meshes and 3 shapes are destroyed before exit, and each took its cache entry along.
-  if(destroyed LESS 69 OR NOT left EQUAL 0)
+  # 67 meshes and 3 shapes are destroyed before exit, and each took its cache entry along.
+  if(destroyed LESS 70 OR NOT left EQUAL 0)
     message(FATAL_ERROR "${prefix}: destructor calls ${destroyed}, cache entries left ${left}:\n${err}")
   endif()
 endfunction()
@@ -109,13 +113,30 @@ if(CASE STREQUAL "cpu")
   if(NOT off_out STREQUAL plain_out)
     message(FATAL_ERROR "KDET_FCL_INTERPOSE=0: results differ from FCL's\n${off_out}")
   endif()
-  require("${off_err}" "off \\(KDET_FCL_INTERPOSE=0\\); backend cpu; fcl::collide calls 0, mesh pairs by kDet 0" "off")
+  require("${off_err}" "off \\(KDET_FCL_INTERPOSE=0\\); backend cpu; cache checksum; fcl::collide calls 0, mesh pairs by kDet 0" "off")
 
   # Bad settings: a one-line notice each, and the defaults.
-  run(bad KDET_FCL_INTERPOSE_BACKEND=gpu KDET_FCL_INTERPOSE_THREADS=many)
+  run(bad KDET_FCL_INTERPOSE_BACKEND=gpu KDET_FCL_INTERPOSE_THREADS=many
+          KDET_FCL_INTERPOSE_CACHE=sometimes)
   require("${bad_err}" "KDET_FCL_INTERPOSE_BACKEND='gpu' is not cpu, cuda or auto; using cpu" "bad backend")
   require("${bad_err}" "KDET_FCL_INTERPOSE_THREADS='many' is not a thread count" "bad threads")
+  require("${bad_err}" "KDET_FCL_INTERPOSE_CACHE='sometimes' is not checksum or trust; using checksum" "bad cache")
   check_kdet(bad cpu)
+
+  # The cache on trust (pointers and counts only): the same as the checksum's results, except
+  # after FCL's replace calls, which write in place. Those it misses by design: the replaced
+  # model's query still finds the pairs of its first shape.
+  run(trust KDET_FCL_INTERPOSE_CACHE=trust)
+  string(REGEX REPLACE "replaced 1:[^\n]*\n" "" trust_rest "${trust_out}")
+  string(REGEX REPLACE "replaced 1:[^\n]*\n" "" kdet_rest "${kdet_out}")
+  if(NOT trust_rest STREQUAL kdet_rest)
+    message(FATAL_ERROR "trust: results differ from the checksum's\n${trust_out}\n${kdet_out}")
+  endif()
+  string(REGEX MATCH "replaced 0: ([^\n]*)" m "${trust_out}")
+  require("${trust_out}" "replaced 1: ${CMAKE_MATCH_1}\n" "trust: the replaced model's stale hash")
+  string(REGEX MATCH "replaced 1: ([^\n]*)" m "${plain_out}")
+  forbid("${trust_out}" "replaced 1: ${CMAKE_MATCH_1}\n" "trust: a replace seen without the checksum")
+  require("${trust_err}" "on; backend cpu; cache trust; " "trust: the statistics line")
 
   # One thread: the same pairs.
   run(one KDET_FCL_INTERPOSE_THREADS=1)

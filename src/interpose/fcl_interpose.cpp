@@ -17,6 +17,11 @@
 //   KDET_FCL_INTERPOSE=0            every call goes to FCL unchanged (an A/B on the same binary)
 //   KDET_FCL_INTERPOSE_BACKEND=cpu|cuda|auto   the backend of kDet's queries (default cpu)
 //   KDET_FCL_INTERPOSE_THREADS=n    worker threads of kDet's queries (default 0: all)
+//   KDET_FCL_INTERPOSE_CACHE=checksum|trust   how a cached model is checked at each query
+//                                   (kdet_fcl::setCacheValidation; default checksum). trust
+//                                   compares pointers and counts only: it misses FCL's replace
+//                                   calls and direct writes, which change a model in place, so it
+//                                   suits programs whose models never change after endModel
 //   KDET_FCL_INTERPOSE_STATS=1      one line on stderr at exit: calls, kDet pairs, forwards,
 //                                   fallbacks, destructor calls, cache entries left
 // A pair that kdet_fcl refuses (kdet_fcl::Error: NaN vertices, indices out of range, a rotation
@@ -30,7 +35,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <exception>
 #include <mutex>
 #include <string>
 
@@ -68,10 +72,12 @@ void say(const std::string& line) { std::fprintf(stderr, "kdet_fcl interpose: %s
 /// FCL's definition of a symbol this library also defines. Without it nothing can go on, so a
 /// missing one is reported and the process aborted (it means libfcl.so is not FCL 0.7's).
 void* fclsOwn(const char* symbol) {
+  dlerror();  // clears an earlier error
   void* f = dlsym(RTLD_NEXT, symbol);
   if (f == nullptr) {
+    const char* why = dlerror();
     say(std::string("FCL's ") + symbol + " was not found after this library (" +
-        (dlerror() ? "dlsym failed" : "no definition") +
+        (why != nullptr ? why : "no definition") +
         "): is libfcl.so FCL 0.7? Remove libkdet_fcl_interpose.so from LD_PRELOAD.");
     std::abort();
   }
@@ -102,10 +108,11 @@ thread_local bool t_inside = false;  // in a call into kdet_fcl on this thread
 void printStats() {
   char line[512];
   std::snprintf(line, sizeof line,
-                "%s; backend %s; fcl::collide calls %llu, mesh pairs by kDet %llu, forwarded to "
+                "%s; backend %s; cache %s; fcl::collide calls %llu, mesh pairs by kDet %llu, forwarded to "
                 "FCL %llu, fell back to FCL %llu; geometry destructor calls %llu; cache entries at "
                 "exit %zu",
                 g_config.enabled ? "on" : "off (KDET_FCL_INTERPOSE=0)", g_config.backend.c_str(),
+                kdet_fcl::cacheValidation() == kdet_fcl::CacheValidation::Trust ? "trust" : "checksum",
                 g_stats.calls.load(), g_stats.kdet_pairs.load(), g_stats.forwarded.load(),
                 g_stats.fallbacks.load(), g_stats.destroyed.load(), kdet_fcl::cacheSize());
   say(line);
@@ -155,6 +162,13 @@ void configure() {
       options.threads = int(n);
   }
   kdet_fcl::setCollideOptions(options);
+  if (const char* c = std::getenv("KDET_FCL_INTERPOSE_CACHE")) {
+    const std::string v = c;
+    if (v == "trust")
+      kdet_fcl::setCacheValidation(kdet_fcl::CacheValidation::Trust);
+    else if (v != "checksum")
+      say("KDET_FCL_INTERPOSE_CACHE='" + v + "' is not checksum or trust; using checksum");
+  }
   (void)kdet_fcl::cacheSize();  // builds the cache's statics before onExit is registered
   std::atexit(onExit);
   g_configured.store(true);

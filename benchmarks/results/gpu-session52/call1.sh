@@ -2,7 +2,8 @@
 # Session 52, call 1: libkdet_fcl_interpose.so on a GPU machine (FCL from .fcl-debs, offline).
 # Builds the library with CUDA, the interposer and the unmodified FCL program; runs the
 # interpose tests (the cuda case takes the GPU); then benchmarks/interpose_bench.sh with the
-# CPU backend (16 threads) and with KDET_FCL_INTERPOSE_BACKEND=cuda.
+# CPU backend (16 threads) and with KDET_FCL_INTERPOSE_BACKEND=cuda. With TRUST_RUN=1 (call 3)
+# also with the CPU backend and KDET_FCL_INTERPOSE_CACHE=trust, and the log is $OUT/$NAME.txt.
 set -uo pipefail
 OUT="${OUT:-gpu-logs}"; mkdir -p "$OUT"
 ROOT="$PWD"
@@ -23,7 +24,11 @@ export LD_LIBRARY_PATH="$LIB${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
   for c in cpu cuda; do echo "== interpose_$c stderr"; cat build-gpu/interpose_$c/*.err 2>/dev/null | grep -v "^$" | head -20; done
   echo "== bench, CPU backend"
   benchmarks/interpose_bench.sh build-gpu 3 15
+  if [[ "${TRUST_RUN:-0}" == 1 ]]; then
+    echo "== bench, CPU backend, cache trust"
+    KDET_FCL_INTERPOSE_CACHE=trust benchmarks/interpose_bench.sh build-gpu 3 15
+  fi
   echo "== bench, CUDA backend"
   KDET_FCL_INTERPOSE_BACKEND=cuda benchmarks/interpose_bench.sh build-gpu 3 15
-} >"$OUT/call1.txt" 2>&1
-tail -n 40 "$OUT/call1.txt"
+} >"$OUT/${NAME:-call1}.txt" 2>&1
+tail -n 40 "$OUT/${NAME:-call1}.txt"
