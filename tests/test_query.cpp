@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <string>
 #include <thread>
@@ -180,30 +181,121 @@ TEST(Query, ResultsAndOrderAreIdenticalForOneAndTwoThreads) {
   }
 }
 
-TEST(Query, MaxPairsStopsEarlyWithAPrefixOfTheFullOrder) {
+TEST(Query, MaxPairsStopsEarlyWithTruePairsInTheCappedOrder) {
   const auto cloth = makeDrapedCloth<double>(40, 4.0, 1.0, 0.03, 1.0);
   const auto sphere = makeSphere<double>({0, 0, 0}, 1.0, 32, 16);
   HashedMesh<double> hc(cloth), hs(sphere);
   const QueryResult all = intersectMeshes(hc, hs);
   ASSERT_GT(all.pairs.size(), 20u);
+  const std::vector<TrianglePair> all_sorted = sorted(all.pairs);
+  // A capped query visits a spread sample first (src/cpu/query.cpp, VisitOrder): its pairs are
+  // true pairs, each once, and a smaller cap's pairs are the first ones of a larger cap's.
+  QueryOptions every;
+  every.max_pairs = all.pairs.size() + 1;  // more than there are: the capped order, whole
+  const QueryResult capped_all = intersectMeshes(hc, hs, every);
+  EXPECT_TRUE(capped_all.complete);
+  EXPECT_EQ(sorted(capped_all.pairs), all_sorted);
   for (std::size_t k : {std::size_t(1), std::size_t(5), std::size_t(20)}) {
     QueryOptions o;
     o.max_pairs = k;
     const QueryResult part = intersectMeshes(hc, hs, o);
     ASSERT_EQ(part.pairs.size(), k);
     EXPECT_FALSE(part.complete);
-    EXPECT_TRUE(std::equal(part.pairs.begin(), part.pairs.end(), all.pairs.begin()));
+    EXPECT_TRUE(std::equal(part.pairs.begin(), part.pairs.end(), capped_all.pairs.begin())) << k;
+    for (const TrianglePair& p : part.pairs)
+      EXPECT_TRUE(std::binary_search(all_sorted.begin(), all_sorted.end(), p)) << k;
     // Paying only for what is asked: fewer exact tests than the full query.
     EXPECT_LT(part.stats.triangle_tests, all.stats.triangle_tests);
+  }
+  // Above kSampleMaxPairs (4096) a cap keeps the full query's order: a prefix of it.
+  {
+    QueryOptions o;
+    o.max_pairs = 5000;
+    EXPECT_EQ(intersectMeshes(hc, hs, o).pairs, all.pairs);
   }
   QueryOptions o;
   o.max_pairs = all.pairs.size() + 1;
   const QueryResult more = intersectMeshes(hc, hs, o);
-  EXPECT_EQ(more.pairs, all.pairs);
+  EXPECT_EQ(sorted(more.pairs), all_sorted);
   EXPECT_TRUE(more.complete);
   EXPECT_TRUE(meshesIntersect(hc, hs));
   hc.setPose(makeTransform<double>({1, 0, 0}, 0.3, {10, 0, 0}));
   EXPECT_FALSE(meshesIntersect(hc, hs));
+}
+
+// A capped query (max_pairs > 0) visits a spread sample of each mesh first (VisitOrder in
+// src/cpu/query.cpp), so its first pair comes early wherever the contact lies. Here a sphere
+// (numbered ring by ring) lies wholly inside a torus's bounds and cuts its tube along a band
+// round its equator: in index order the query looked up most of the sphere before that band.
+TEST(Query, ACappedQueryMeetsAContactEarlyWhereverItLies) {
+  const auto ball = makeSphere<double>({0, 0, 0}, 0.62, 48, 24);
+  TriangleMesh<double> ring;  // R 0.9, r 0.3, 64 x 24 quads
+  const double pi = 3.14159265358979323846;
+  auto at = [&](int i, int j) {
+    const double th = 2 * pi * (i % 64) / 64, ph = 2 * pi * (j % 24) / 24;
+    return Vec3<double>{(0.9 + 0.3 * std::cos(ph)) * std::cos(th),
+                        (0.9 + 0.3 * std::cos(ph)) * std::sin(th), 0.3 * std::sin(ph)};
+  };
+  for (int j = 0; j < 24; ++j)
+    for (int i = 0; i < 64; ++i) {
+      ring.addTriangle(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      ring.addTriangle(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  QueryOptions one_thread, first;
+  one_thread.threads = first.threads = 1;
+  first.max_pairs = 1;
+  for (const bool ball_first : {true, false}) {
+    HashedMesh<double> a(ball_first ? ball : ring), b(ball_first ? ring : ball);
+    const QueryResult full = intersectMeshes(a, b, one_thread);
+    ASSERT_GT(full.pairs.size(), 10u) << ball_first;
+    const QueryResult got = intersectMeshes(a, b, first);
+    ASSERT_EQ(got.pairs.size(), 1u) << ball_first;
+    const auto want = sorted(full.pairs);
+    EXPECT_TRUE(std::binary_search(want.begin(), want.end(), got.pairs[0])) << ball_first;
+    EXPECT_LT(got.stats.lookups * 4, full.stats.lookups) << ball_first;
+  }
+  // The two as one mesh: its self query's first pair.
+  TriangleMesh<double> both = ball;
+  for (const Triangle& t : ring.triangles)
+    both.addTriangle(ring.vertices[t[0]], ring.vertices[t[1]], ring.vertices[t[2]]);
+  HashedMesh<double> h(both);
+  const QueryResult self_full = intersectSelf(h, one_thread);
+  ASSERT_GT(self_full.pairs.size(), 10u);
+  const QueryResult self_first = intersectSelf(h, first);
+  ASSERT_EQ(self_first.pairs.size(), 1u);
+  const auto self_want = sorted(self_full.pairs);
+  EXPECT_TRUE(std::binary_search(self_want.begin(), self_want.end(), self_first.pairs[0]));
+  EXPECT_LT(self_first.stats.lookups * 4, self_full.stats.lookups);
+}
+
+// The capped order visits every triangle exactly once at every mesh size (the sample, then the
+// rest; sizes around the sample's step of 8 and the chunk of 256): a cap above the pair count
+// finds the full query's pairs, each once.
+TEST(Query, ACappedQueryVisitsEveryTriangleOnceAtAnySize) {
+  for (std::size_t n : {1, 2, 3, 7, 8, 9, 16, 23, 24, 25, 31, 33, 64, 65, 255, 256, 257, 1000,
+                        2047, 2049}) {
+    const double extent = std::max(1.0, 0.5 * std::cbrt(double(n)));  // some pairs, not too many
+    const auto a = makeRandomSoup<double>(n, extent, 0.3, 0.9, 100 + n);
+    const auto b = makeRandomSoup<double>(n + 5, extent, 0.3, 0.9, 200 + n);
+    HashedMesh<double> ha(a), hb(b);
+    const QueryResult full = intersectMeshes(ha, hb);
+    const QueryResult self_full = intersectSelf(ha);
+    QueryOptions capped;
+    capped.max_pairs = 4096;  // sampled (kSampleMaxPairs), above every pair count here
+    const QueryResult inter = intersectMeshes(ha, hb, capped);
+    ASSERT_LT(full.pairs.size(), 4096u) << n;
+    EXPECT_TRUE(inter.complete) << n;
+    EXPECT_EQ(sorted(inter.pairs), sorted(full.pairs)) << n;
+    EXPECT_EQ(inter.pairs.size(), full.pairs.size()) << n;
+    const QueryResult self = intersectSelf(ha, capped);
+    ASSERT_LT(self_full.pairs.size(), 4096u) << n;
+    EXPECT_EQ(sorted(self.pairs), sorted(self_full.pairs)) << n;
+    EXPECT_EQ(self.pairs.size(), self_full.pairs.size()) << n;
+    if (n >= 64) {  // the check has something to find (about n / 5 inter pairs)
+      EXPECT_GT(full.pairs.size(), n / 10) << n;
+      EXPECT_GT(self_full.pairs.size(), 0u) << n;
+    }
+  }
 }
 
 TEST(Query, TouchingAndCoincidentGeometryCounts) {

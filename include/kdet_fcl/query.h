@@ -16,7 +16,11 @@ namespace kdet_fcl {
 /// stops at the first intersecting pair.
 struct QueryOptions {
   /// Stop once this many pairs are found (0: find every pair). The reported pairs are the first
-  /// ones in the deterministic output order (see QueryResult::pairs).
+  /// ones in a deterministic order, the same for any thread count. On the CPU, a cap of at most
+  /// 4096 visits a spread sample of each mesh's triangles first, so that a contact anywhere is
+  /// met early (a first-contact check pays for little more than the way to its first pair); its
+  /// pairs are then not a prefix of the uncapped query's order, but a smaller cap's pairs are a
+  /// prefix of a larger one's. The CUDA backend reports the first pairs in (a, b) order.
   std::size_t max_pairs = 0;
   /// Worker threads (0: std::thread::hardware_concurrency()). Results do not depend on it.
   int threads = 0;

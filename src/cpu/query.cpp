@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <limits>
 #include <mutex>
+#include <numeric>
 #include <string>
 
 #include "cpu/hierarchical_hash.h"
@@ -31,11 +32,55 @@ using detail::Aabb;
 using detail::HierarchicalHash;
 
 constexpr std::size_t kChunk = 1024;           // triangles per unit of parallel work
+constexpr std::size_t kCappedChunk = 256;       // the same for a query with max_pairs
+constexpr std::size_t kSampleStep = 8;         // a capped query's sample: one index in 8
+constexpr std::size_t kSampleMaxPairs = 4096;   // capped queries up to this many pairs sample
 constexpr std::size_t kParallelMinimum = 16384; // below this, threads cost more than they save
+
+/// The order in which a query visits one mesh's triangles, cut into chunks. A query that finds
+/// every pair visits them in index order (its arrays' locality), in chunks of kChunk. A capped
+/// query (max_pairs > 0) wants some pairs soon, and index order would first visit every
+/// triangle before the contact: a whole region of a mesh built row by row. So it visits first a
+/// sample, every kSampleStep-th index (0, 8, 16, ...), spread over the mesh (sample q at
+/// q * stride mod s, with s samples and the stride near s / golden ratio and coprime to s, so
+/// each once, like a low-discrepancy sequence), then the other indices in index order. A
+/// contact region holding a share f of the triangles is met after about 1/f samples; a query
+/// with no pair visits one triangle in kSampleStep out of order. Chunks of kCappedChunk. A query
+/// capped above kSampleMaxPairs (FCL's "every contact" requests cap at INT_MAX) keeps index
+/// order: it visits most of any contact anyway. The order depends on n and on whether the
+/// query samples, so the pairs do not depend on the thread count.
+struct VisitOrder {
+  std::size_t n = 0, chunk = kChunk, samples = 0, stride = 0;  // stride 0: index order
+
+  static bool samples_for(std::size_t max_pairs) {
+    return max_pairs > 0 && max_pairs <= kSampleMaxPairs;
+  }
+  static VisitOrder of(std::size_t n, std::size_t max_pairs) {
+    VisitOrder o;
+    o.n = n;
+    if (!samples_for(max_pairs)) return o;
+    o.chunk = kCappedChunk;
+    o.samples = (n + kSampleStep - 1) / kSampleStep;
+    if (o.samples < 3) return o;
+    o.stride = std::max<std::size_t>(1, std::size_t(0.6180339887498949 * double(o.samples)));
+    while (std::gcd(o.stride, o.samples) != 1) ++o.stride;
+    return o;
+  }
+  std::size_t chunks() const { return (n + chunk - 1) / chunk; }
+  std::size_t begin(std::size_t k) const { return k * chunk; }
+  std::size_t end(std::size_t k) const { return std::min(n, (k + 1) * chunk); }
+  /// The index visited at position p < n (a bijection of [0, n); n < 2^32, so products fit).
+  std::size_t operator[](std::size_t p) const {
+    if (stride == 0) return p;
+    if (p < samples) return kSampleStep * (p * stride % samples);
+    const std::size_t q = p - samples;  // the q-th index that is not a sample
+    return q / (kSampleStep - 1) * kSampleStep + 1 + q % (kSampleStep - 1);
+  }
+};
 
 /// Runs `num_chunks` chunks of work, each producing pairs in a deterministic order, and
 /// concatenates them in chunk order. With max_pairs > 0, stops once the completed prefix of
-/// chunks holds max_pairs pairs, so the reported pairs are the first ones of the full order
+/// chunks holds max_pairs pairs, so the reported pairs are the first ones of the chunks' order
 /// whatever the thread count. fn(chunk, out, stats) may stop its chunk early once `out` holds
 /// max_pairs pairs.
 template <class Fn>
@@ -180,19 +225,32 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
                     vb[tb[j][2]]);
   };
 
-  const std::size_t chunks_a = (na + kChunk - 1) / kChunk;
-  const std::size_t chunks_b = (nb + kChunk - 1) / kChunk;
+  // The chunks: A's then B's; in a query that samples (VisitOrder) they alternate, A's first,
+  // so that a direction whose size rule finds nothing (every triangle of A larger than B's)
+  // is not visited whole first.
   const std::size_t max_pairs = options.max_pairs;
+  const bool sampled = VisitOrder::samples_for(max_pairs);
+  const VisitOrder order_a = VisitOrder::of(na, max_pairs);
+  const VisitOrder order_b = VisitOrder::of(nb, max_pairs);
+  const std::size_t chunks_a = order_a.chunks(), chunks_b = order_b.chunks();
+  const std::size_t both = std::min(chunks_a, chunks_b);
+  // Chunk c: which direction (true: A -> B) and which of that direction's chunks.
+  auto chunkOf = [&](std::size_t c) -> std::pair<bool, std::size_t> {
+    if (!sampled) return c < chunks_a ? std::make_pair(true, c) : std::make_pair(false, c - chunks_a);
+    if (c < 2 * both) return {c % 2 == 0, c / 2};
+    return {chunks_a > chunks_b, c - both};
+  };
   return runChunks(chunks_a + chunks_b, threads, max_pairs,
                    [&](std::size_t c, std::vector<TrianglePair>& out, QueryStats& st) {
     auto emit = [&](TrianglePair p) {
       out.push_back(p);
       return !(max_pairs > 0 && out.size() >= max_pairs);
     };
-    if (c < chunks_a) {
+    const auto [a_to_b, k] = chunkOf(c);
+    if (a_to_b) {
       // A -> B: A's triangle i against B's triangles at least as large.
-      const std::size_t end = std::min(na, (c + 1) * kChunk);
-      for (std::size_t i = c * kChunk; i < end; ++i) {
+      for (std::size_t pos = order_a.begin(k); pos < order_a.end(k); ++pos) {
+        const std::size_t i = order_a[pos];
         const double di = ha.diameter[i];
         if (di > hb.d_max) continue;  // nothing in B is as large
         if (!detail::boxesOverlap(ha.boxes[i], b_in_a)) continue;
@@ -210,9 +268,8 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
       }
     } else {
       // B -> A: B's triangle j against A's strictly larger triangles, looked up in A's frame.
-      const std::size_t cb = c - chunks_a;
-      const std::size_t end = std::min(nb, (cb + 1) * kChunk);
-      for (std::size_t j = cb * kChunk; j < end; ++j) {
+      for (std::size_t pos = order_b.begin(k); pos < order_b.end(k); ++pos) {
+        const std::size_t j = order_b[pos];
         const double dj = hb.diameter[j];
         if (dj >= ha.d_max) continue;  // nothing in A is strictly larger
         if (!detail::boxesOverlap(hb.boxes[j], a_in_b)) continue;
@@ -252,10 +309,11 @@ QueryResult computeSelf(const HashedMesh<S>& M, const QueryOptions& options) {
   const Triangle* t = m.triangles.data();
   const std::size_t max_pairs = options.max_pairs;
 
-  return runChunks((n + kChunk - 1) / kChunk, threads, max_pairs,
+  const VisitOrder order = VisitOrder::of(n, max_pairs);
+  return runChunks(order.chunks(), threads, max_pairs,
                    [&](std::size_t c, std::vector<TrianglePair>& out, QueryStats& st) {
-    const std::size_t end = std::min(n, (c + 1) * kChunk);
-    for (std::size_t i = c * kChunk; i < end; ++i) {
+    for (std::size_t pos = order.begin(c); pos < order.end(c); ++pos) {
+      const std::size_t i = order[pos];
       const double di = h.diameter[i];
       const auto ui = std::uint32_t(i);
       // The larger triangle of each pair is the one with the larger (diameter, index).

@@ -20,6 +20,7 @@
 #include <kdet_fcl/kdet_fcl.h>
 
 #include "fcl_only_meshes.h"  // examples/: the same sphere and sheet
+#include "probe_util.h"
 
 namespace {
 using fcl_only::Soup;
@@ -29,20 +30,9 @@ using fcl_only::sphere;
 std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> model(const Soup& s) {
   return fcl_only::model<fcl::OBBRSSd>(s);
 }
-kdet_fcl::TriangleMesh<double> mesh(const Soup& s) {
-  kdet_fcl::TriangleMesh<double> m;
-  for (const auto& p : s.points) m.vertices.push_back({p[0], p[1], p[2]});
-  for (const auto& t : s.triangles)
-    m.triangles.push_back({std::uint32_t(t[0]), std::uint32_t(t[1]), std::uint32_t(t[2])});
-  return m;
-}
-using Pairs = std::set<std::pair<long, long>>;
-Pairs pairsOf(const fcl::CollisionResultd& r) {
-  Pairs s;
-  for (std::size_t i = 0; i < r.numContacts(); ++i)
-    s.emplace(r.getContact(i).b1, r.getContact(i).b2);
-  return s;
-}
+using probe::mesh;
+using probe::Pairs;
+using probe::pairsOf;
 }  // namespace
 
 int main() {
