@@ -236,7 +236,7 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
   const std::size_t both = std::min(chunks_a, chunks_b);
   // Chunk c: which direction (true: A -> B) and which of that direction's chunks.
   auto chunkOf = [&](std::size_t c) -> std::pair<bool, std::size_t> {
-    if (!sampled) return c < chunks_a ? std::make_pair(true, c) : std::make_pair(false, c - chunks_a);
+    if (!sampled) return {c < chunks_a, c < chunks_a ? c : c - chunks_a};
     if (c < 2 * both) return {c % 2 == 0, c / 2};
     return {chunks_a > chunks_b, c - both};
   };

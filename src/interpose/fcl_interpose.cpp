@@ -54,8 +54,9 @@ using Result = fcl::CollisionResult<double>;
 using Transform = fcl::Transform3<double>;
 
 // The mangled names of FCL 0.7's exports (nm -D libfcl.so.0.7).
-#define KDET_COLLIDE_OBJECTS \
-  "_ZN3fcl7collideIdEEmPKNS_15CollisionObjectIT_EES5_RKNS_16CollisionRequestIS2_EERNS_15CollisionResultIS2_EE"
+#define KDET_COLLIDE_OBJECTS                                                      \
+  "_ZN3fcl7collideIdEEmPKNS_15CollisionObjectIT_EES5_RKNS_16CollisionRequestIS2_EERNS_" \
+  "15CollisionResultIS2_EE"
 #define KDET_COLLIDE_GEOMETRIES                                                               \
   "_ZN3fcl7collideIdEEmPKNS_17CollisionGeometryIT_EERKN5Eigen9TransformIS2_Li3ELi1ELi0EEES5_" \
   "SA_RKNS_16CollisionRequestIS2_EERNS_15CollisionResultIS2_EE"
@@ -67,7 +68,9 @@ using CollideGeometriesFn = std::size_t (*)(const Geometry*, const Transform&, c
                                             const Transform&, const Request&, Result&);
 using DestructorFn = void (*)(void*);
 
-void say(const std::string& line) { std::fprintf(stderr, "kdet_fcl interpose: %s\n", line.c_str()); }
+void say(const std::string& line) {
+  std::fprintf(stderr, "kdet_fcl interpose: %s\n", line.c_str());
+}
 
 /// FCL's definition of a symbol this library also defines. Without it nothing can go on, so a
 /// missing one is reported and the process aborted (it means libfcl.so is not FCL 0.7's).
@@ -106,13 +109,14 @@ std::atomic<bool> g_exiting{false};     // exit() has begun: the cache may be go
 thread_local bool t_inside = false;  // in a call into kdet_fcl on this thread
 
 void printStats() {
+  const bool trust = kdet_fcl::cacheValidation() == kdet_fcl::CacheValidation::Trust;
   char line[512];
   std::snprintf(line, sizeof line,
-                "%s; backend %s; cache %s; fcl::collide calls %llu, mesh pairs by kDet %llu, forwarded to "
-                "FCL %llu, fell back to FCL %llu; geometry destructor calls %llu; cache entries at "
-                "exit %zu",
+                "%s; backend %s; cache %s; fcl::collide calls %llu, mesh pairs by kDet %llu, "
+                "forwarded to FCL %llu, fell back to FCL %llu; geometry destructor calls %llu; "
+                "cache entries at exit %zu",
                 g_config.enabled ? "on" : "off (KDET_FCL_INTERPOSE=0)", g_config.backend.c_str(),
-                kdet_fcl::cacheValidation() == kdet_fcl::CacheValidation::Trust ? "trust" : "checksum",
+                trust ? "trust" : "checksum",
                 g_stats.calls.load(), g_stats.kdet_pairs.load(), g_stats.forwarded.load(),
                 g_stats.fallbacks.load(), g_stats.destroyed.load(), kdet_fcl::cacheSize());
   say(line);
@@ -260,13 +264,14 @@ std::size_t kdetInterposedCollideGeometries(const Geometry* o1, const Transform&
 // BVHModel destructors reach it through the dynamic linker too. By then the object is being
 // destroyed; only its address is used.
 
-#define KDET_GEOMETRY_DESTRUCTOR(KIND)                                                      \
-  void kdetInterposedGeometry##KIND(void* self) __asm__("_ZN3fcl17CollisionGeometryIdE" #KIND "Ev"); \
-  void kdetInterposedGeometry##KIND(void* self) {                                          \
-    forgetGeometry(self);                                                                  \
-    static const auto f = reinterpret_cast<DestructorFn>(                                  \
-        fclsOwn("_ZN3fcl17CollisionGeometryIdE" #KIND "Ev"));                              \
-    f(self);                                                                               \
+#define KDET_GEOMETRY_DESTRUCTOR(KIND)                                             \
+  void kdetInterposedGeometry##KIND(void* self)                                    \
+      __asm__("_ZN3fcl17CollisionGeometryIdE" #KIND "Ev");                         \
+  void kdetInterposedGeometry##KIND(void* self) {                                  \
+    forgetGeometry(self);                                                          \
+    static const auto f = reinterpret_cast<DestructorFn>(                          \
+        fclsOwn("_ZN3fcl17CollisionGeometryIdE" #KIND "Ev"));                      \
+    f(self);                                                                       \
   }
 
 KDET_GEOMETRY_DESTRUCTOR(D0)
