@@ -103,11 +103,19 @@ void check(kdet_fuzz::ByteReader& r) {
   std::vector<TrianglePair> self = intersectSelf(ha, o).pairs;
   std::sort(self.begin(), self.end());
   if (self != bruteForceIntersectSelf(a)) std::abort();
-  // max_pairs: a prefix of the full (unsorted) order.
+  // max_pairs: min(k, all) pairs, the first ones of the capped order (src/cpu/query.cpp,
+  // VisitOrder), which a cap above the pair count (up to 4096, so still sampled) gives whole:
+  // the true pairs, each once.
   o.max_pairs = 1 + r.u8() % 4;
-  const QueryResult full = intersectMeshes(ha, hb), part = intersectMeshes(ha, hb, o);
-  const std::size_t k = std::min(o.max_pairs, full.pairs.size());
-  if (part.pairs.size() != k || !std::equal(part.pairs.begin(), part.pairs.end(), full.pairs.begin()))
+  QueryOptions whole = o;
+  whole.max_pairs = 4096;  // > 23 * 23 pairs
+  const QueryResult part = intersectMeshes(ha, hb, o), capped = intersectMeshes(ha, hb, whole);
+  std::vector<TrianglePair> capped_sorted = capped.pairs;
+  std::sort(capped_sorted.begin(), capped_sorted.end());
+  if (capped_sorted != want || !capped.complete) std::abort();
+  const std::size_t k = std::min(o.max_pairs, want.size());
+  if (part.pairs.size() != k ||
+      !std::equal(part.pairs.begin(), part.pairs.end(), capped.pairs.begin()))
     std::abort();
 }
 
