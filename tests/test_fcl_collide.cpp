@@ -783,6 +783,31 @@ TEST(FclCollideBadInput, NaNVerticesAndPosesThrow) {
   kdet_fcl::clearCache();
 }
 
+// An empty model (endModel with nothing added: FCL prints an error and calls its type unknown)
+// meets nothing, against a mesh or a shape, in either place; FCL's own collide crashes on it.
+TEST(FclCollideBadInput, AnEmptyModelMeetsNothing) {
+  auto a = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(
+      kdet_fcl::makeSphere<double>({0, 0, 0}, 1.0, 12, 6));
+  auto empty = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+  empty->beginModel();
+  empty->endModel();
+  ASSERT_EQ(empty->getModelType(), fcl::BVH_MODEL_UNKNOWN);
+  auto box = std::make_shared<fcl::Boxd>(1, 1, 1);
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  const fcl::CollisionRequestd req(100, true);
+  const fcl::CollisionGeometryd* mesh = a.get();
+  const fcl::CollisionGeometryd* shape = box.get();
+  for (const fcl::CollisionGeometryd* other : {mesh, shape}) {
+    fcl::CollisionResultd res;
+    EXPECT_EQ(kdet_fcl::collide(empty.get(), I, other, I, req, res), 0u);
+    EXPECT_EQ(kdet_fcl::collide(other, I, empty.get(), I, req, res), 0u);
+    EXPECT_FALSE(res.isCollision());
+  }
+  fcl::CollisionResultd self;
+  EXPECT_EQ(kdet_fcl::selfCollide(empty.get(), I, req, self), 0u);
+  kdet_fcl::clearCache();
+}
+
 // The backend reaches the FCL-facing entry points through setCollideOptions(): Cuda without a
 // device is a typed error; with a device the contacts equal the CPU's.
 TEST(FclCollideBackend, CudaBackendThroughCollideAndSelfCollide) {

@@ -511,9 +511,13 @@ std::size_t collide(const fcl::CollisionGeometry<S>* o1, const fcl::Transform3<S
   requireFinite(tf1, "collide");
   requireFinite(tf2, "collide");
   FclMeshView<S> v1, v2;
-  if (detail::viewOf(o1, v1) && detail::viewOf(o2, v2) && v1.triangles_model &&
-      v2.triangles_model)
+  const bool bvh1 = detail::viewOf(o1, v1), bvh2 = detail::viewOf(o2, v2);
+  if (bvh1 && bvh2 && v1.triangles_model && v2.triangles_model)
     return meshCollide(o1, v1, tf1, o2, v2, tf2, request, result);
+  // An empty BVHModel (no vertices, no triangles: FCL's type "unknown") meets nothing. FCL's own
+  // traversal would read its missing hierarchy and crash.
+  auto empty = [](const FclMeshView<S>& v) { return v.num_vertices == 0 && v.num_tris == 0; };
+  if ((bvh1 && empty(v1)) || (bvh2 && empty(v2))) return result.numContacts();
   prepareForFcl(o1);
   prepareForFcl(o2);
   return fcl::collide(o1, tf1, o2, tf2, request, result);
