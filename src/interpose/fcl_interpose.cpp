@@ -205,13 +205,17 @@ std::size_t intercept(const Geometry* g1, const Geometry* g2, const Result& resu
                       Fcl fcl) {
   if (t_inside || !config().enabled) return fcl();
   g_stats.calls.fetch_add(1, std::memory_order_relaxed);
-  const bool meshes = g1 != nullptr && g2 != nullptr && kdet_fcl::isKdetMesh(g1) &&
-                      kdet_fcl::isKdetMesh(g2);
   const std::size_t before = result.numContacts();
   try {
     Inside inside;
     const std::size_t n = kdet();
-    (meshes ? g_stats.kdet_pairs : g_stats.forwarded).fetch_add(1, std::memory_order_relaxed);
+    // Which way the pair went matters only to the statistics line: without it, no look at the
+    // geometries' types beyond kdet_fcl's own.
+    if (g_config.stats) {
+      const bool meshes = g1 != nullptr && g2 != nullptr && kdet_fcl::isKdetMesh(g1) &&
+                          kdet_fcl::isKdetMesh(g2);
+      (meshes ? g_stats.kdet_pairs : g_stats.forwarded).fetch_add(1, std::memory_order_relaxed);
+    }
     return n;
   } catch (const kdet_fcl::Error& e) {
     const unsigned long long k = g_stats.fallbacks.fetch_add(1) + 1;
