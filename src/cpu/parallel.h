@@ -29,7 +29,8 @@ inline int resolveThreads(int requested, std::size_t chunks) {
 
 /// Vertex arrays of at least this many bytes are passed over by several threads (HashedMesh's
 /// updateVertices and commitVertices, the FCL entry points' conversion of a deformed model's
-/// positions and its local AABB): one per kVertexBytesPerThread, at most the threads asked for,
+/// positions and its local AABB, and the checksum of a plain model's arrays at each query,
+/// src/fcl/checksum.h): one per kVertexBytesPerThread, at most the threads asked for,
 /// and only where that makes at least kMinVertexThreads. The threads are the library's kept
 /// workers (worker_pool.h), woken in microseconds rather than started in tens of them, which is
 /// what let the split go from 2 MB a thread (4 MB and up) to 512 KB (1.5 MB and up). On the
