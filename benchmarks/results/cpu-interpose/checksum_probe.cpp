@@ -57,13 +57,24 @@ void spin(double micros) {
   }
 }
 
+// Reads `bytes` of another buffer: the other data a program's query touches between two
+// checksums, which pushes the model's arrays out of the nearer caches.
+std::uint64_t readElsewhere(std::size_t bytes) {
+  static std::vector<std::uint64_t> other;
+  if (other.size() < bytes / 8) other.assign(bytes / 8, 1);
+  std::uint64_t s = 0;
+  for (std::size_t i = 0; i < bytes / 8; i += 8) s += other[i];  // a line at a time
+  return s;
+}
+
 template <class F>
-double medianMicros(F&& f, std::size_t bytes, double gap_micros = 0) {
+double medianMicros(F&& f, std::size_t bytes, double gap_micros = 0, std::size_t evict = 0) {
   const int reps = bytes > (64u << 20) ? 7 : bytes > (8u << 20) ? 21 : 101;
   std::vector<double> t;
   volatile std::uint64_t sink = 0;
   for (int r = 0; r < reps + 2; ++r) {
     if (gap_micros > 0) spin(gap_micros);
+    if (evict > 0) sink = sink + readElsewhere(evict);
     const auto a = std::chrono::steady_clock::now();
     sink = sink + f();
     const auto b = std::chrono::steady_clock::now();
@@ -111,18 +122,22 @@ int main() {
   // Each kernel on one thread, back to back and after a gap of scalar work (a program's other
   // work between queries; Intel cores slow their 256-bit units down after they idle).
   std::printf("\nby kernel, one thread (µs): back to back / after 20 µs / after 200 µs / after 2 ms "
-              "of scalar work\n");
+              "of scalar work / after reading 4 MB / 64 MB elsewhere\n");
   for (std::size_t bytes : {std::size_t(193536), std::size_t(1) << 20, std::size_t(3600000)}) {
     std::vector<unsigned char> buf(bytes);
     for (std::size_t i = 0; i < bytes; ++i) buf[i] = static_cast<unsigned char>(i * 131 + 7);
     std::printf("%12zu  scalar", bytes);
     for (double gap : {0.0, 20.0, 200.0, 2000.0})
       std::printf(" %7.1f", medianMicros([&] { return scalarChecksum(buf.data(), bytes, 1); }, bytes, gap));
+    for (std::size_t evict : {std::size_t(4) << 20, std::size_t(64) << 20})
+      std::printf(" %7.1f", medianMicros([&] { return scalarChecksum(buf.data(), bytes, 1); }, bytes, 0, evict));
     for (ChecksumKernel k : {ChecksumKernel::Portable, ChecksumKernel::Sse41, ChecksumKernel::Avx2}) {
       if (!checksumKernelAvailable(k)) continue;
       std::printf("  kernel %d", int(k));
       for (double gap : {0.0, 20.0, 200.0, 2000.0})
         std::printf(" %7.1f", medianMicros([&] { return checksumBytes(buf.data(), bytes, 1, k); }, bytes, gap));
+      for (std::size_t evict : {std::size_t(4) << 20, std::size_t(64) << 20})
+        std::printf(" %7.1f", medianMicros([&] { return checksumBytes(buf.data(), bytes, 1, k); }, bytes, 0, evict));
     }
     std::printf("\n");
   }
