@@ -3,6 +3,7 @@
 
 #include "kdet_fcl/fcl_collide.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -81,7 +82,10 @@ template <class S>
 ModelChecksums checksumsOf(const FclMeshView<S>& v) {
   const std::size_t vertex_bytes = sizeof(fcl::Vector3<S>) * std::size_t(v.num_vertices);
   const std::size_t triangle_bytes = sizeof(fcl::Triangle) * std::size_t(v.num_tris);
-  const int threads = collideOptions().threads;
+  // (The options, behind their mutex, are read only where an array is large enough to split.)
+  const int threads = std::max(vertex_bytes, triangle_bytes) >= cpu::kParallelVertexBytes
+                          ? collideOptions().threads
+                          : 1;
   return {checksumBytes(v.vertices, vertex_bytes, 1, cpu::vertexPassThreads(vertex_bytes, threads)),
           checksumBytes(v.triangles, triangle_bytes, 2,
                         cpu::vertexPassThreads(triangle_bytes, threads))};
