@@ -36,7 +36,7 @@ cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DKDET_FCL_BUILD_FUZZERS=ON -DKDET_FCL_BUILD_TESTS=OFF -DKDET_FCL_BUILD_CLI=OFF \
-  -DKDET_FCL_BUILD_BENCHMARKS=OFF -DKDET_FCL_CUDA=OFF >/dev/null
+  -DKDET_FCL_BUILD_BENCHMARKS=OFF -DKDET_FCL_CUDA=OFF -DKDET_FCL_PYTHON=OFF >/dev/null
 echo "[fuzz] building ${TARGETS[*]}"
 cmake --build "$BUILD" --parallel "$JOBS" --target "${TARGETS[@]}" >/dev/null
 

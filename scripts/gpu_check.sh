@@ -16,8 +16,9 @@
 #               needed ../shared/data files, since an offline GPU machine has no ../shared)
 #   GPU_BENCH   1: also run the GPU benchmark (benchmarks/gpu_bench; log and CSV in OUT)
 #   TARGETS     build only these targets (space-separated; default: everything). ctest -L cuda
-#               also runs cli_backend (the kdet tool's --backend cuda) and interpose_cuda (an
-#               unmodified FCL program on the GPU), so their targets are added to them
+#               also runs cli_backend (the kdet tool's --backend cuda), interpose_cuda (an
+#               unmodified FCL program on the GPU) and python_cuda (the Python module, built
+#               where python3 has pybind11 and NumPy), so their targets are added to them
 #   CTEST_ALL   0: skip the run of the whole suite after the CUDA label (default 1)
 #   SANITIZER   1: also run compute-sanitizer memcheck and racecheck on small CUDA test scenes
 #               (queries, an overflow, 128-bit keys, both scans, the commit's and update's copies,
@@ -104,12 +105,29 @@ cmake_args=(
   "-DCMAKE_EXE_LINKER_FLAGS=-L$LIBDIR"
 )
 [[ -x /usr/local/cuda/bin/nvcc ]] && cmake_args+=(-DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc)
+# The Python module for the python3 on PATH where it has pybind11 and NumPy (pip's pybind11 names
+# its CMake folder); otherwise it is left out.
+if python3 -c "import pybind11, numpy" >/dev/null 2>&1; then
+  cmake_args+=("-DPython_EXECUTABLE=$(command -v python3)"
+               "-Dpybind11_DIR=$(python3 -m pybind11 --cmakedir)" -DKDET_FCL_PYTHON=ON)
+  # The Python tests preload the compiler's libstdc++ (python/CMakeLists.txt,
+  # KDET_FCL_PYTHON_TEST_PRELOAD): a toolchain that copies parts of libstdc++ into the shared
+  # library (as the GPU image's /opt/gcc does) leaves a Python process, which has no libstdc++ of
+  # its own, with two copies, and formatting a number then crashes. The preload is the library's
+  # own libstdc++, so it changes nothing elsewhere.
+  cc_cxx=$(readlink -f "$("${CXX:-c++}" -print-file-name=libstdc++.so.6)" 2>/dev/null)
+  [[ -f "$cc_cxx" ]] && cmake_args+=("-DKDET_FCL_PYTHON_TEST_PRELOAD=$cc_cxx")
+else
+  cmake_args+=(-DKDET_FCL_PYTHON=OFF)
+fi
 # shellcheck disable=SC2206
 extra=(${CMAKE_ARGS})
 
-# (ctest -L cuda runs cli_backend, the kdet tool on the GPU, and interpose_cuda.)
+# (ctest -L cuda runs cli_backend, the kdet tool on the GPU, interpose_cuda and python_cuda.)
 if [[ -n "${TARGETS:-}" ]]; then
-  for t in kdet kdet_fcl_interpose example_unmodified_fcl; do
+  extra_targets="kdet kdet_fcl_interpose example_unmodified_fcl"
+  [[ " ${cmake_args[*]} " == *" -DKDET_FCL_PYTHON=ON "* ]] && extra_targets+=" _kdet_fcl"
+  for t in $extra_targets; do
     if [[ " $TARGETS " != *" $t "* ]]; then TARGETS="$TARGETS $t"; fi
   done
 fi

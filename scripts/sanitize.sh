@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the whole test suite with AddressSanitizer + UndefinedBehaviorSanitizer into
-# ${ASAN_BUILD_DIR:-build-asan} (CPU only, no benchmarks) and runs it with ctest. Any sanitizer
+# ${ASAN_BUILD_DIR:-build-asan} (CPU only, no benchmarks, no Python module) and runs it with ctest. Any sanitizer
 # report aborts the test that triggered it (-fno-sanitize-recover=all), so it fails.
 # Extra arguments go to ctest. Ends with ctest's summary; the exit status is ctest's.
 set -euo pipefail
@@ -17,7 +17,7 @@ cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$opt" -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
-  -DKDET_FCL_CUDA=OFF -DKDET_FCL_BUILD_BENCHMARKS=OFF >/dev/null
+  -DKDET_FCL_CUDA=OFF -DKDET_FCL_BUILD_BENCHMARKS=OFF -DKDET_FCL_PYTHON=OFF >/dev/null
 echo "[sanitize] building $BUILD with $JOBS jobs"
 cmake --build "$BUILD" --parallel "$JOBS" >/dev/null
 # Two reports come from FCL itself, not from kdet_fcl, and are silenced narrowly:

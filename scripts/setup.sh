@@ -18,9 +18,11 @@ CMAKE_ARGS="${CMAKE_ARGS:-}"
 JOBS="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
 
 # libgmp-dev: the exact-arithmetic referee in the tests; gnuplot-nox: plots in the benchmarks;
-# clang + libclang-rt-14-dev: libFuzzer for scripts/fuzz.sh (CI runs it after the tests).
+# clang + libclang-rt-14-dev: libFuzzer for scripts/fuzz.sh (CI runs it after the tests);
+# python3-dev + pybind11-dev + python3-numpy: the Python module (python/, for /usr/bin/python3).
 PACKAGES=(build-essential cmake libgtest-dev libbenchmark-dev libeigen3-dev libccd-dev
-          libfcl-dev libtinyobjloader-dev libgmp-dev gnuplot-nox clang libclang-rt-14-dev)
+          libfcl-dev libtinyobjloader-dev libgmp-dev gnuplot-nox clang libclang-rt-14-dev
+          python3-dev pybind11-dev python3-numpy)
 
 log() { printf '[setup] %s\n' "$*"; }
 

@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "cpu/worker_pool.h"
 #include "kept_self_scenario.h"
 #include "scoped_env.h"
 #include "test_util.h"
@@ -178,6 +179,51 @@ TEST(Query, ResultsAndOrderAreIdenticalForOneAndTwoThreads) {
     one.max_pairs = two.max_pairs = k;
     EXPECT_EQ(intersectMeshes(hc, hs, one).pairs, intersectMeshes(hc2, hs, two).pairs) << k;
     EXPECT_EQ(intersectSelf(hc, one).pairs, intersectSelf(hc2, two).pairs) << k;
+  }
+}
+
+// A capped query runs its first chunks (one of each mesh's sample) on the calling thread and
+// wakes workers only if its pairs are not all there (src/cpu/query.cpp, runChunks): a first
+// contact on a large pair costs no thread's wake-up, and the pairs are the same for any thread
+// count whether the cap is met in those chunks, at their end or later.
+TEST(Query, ACappedQueryMetInItsFirstChunksWakesNoWorker) {
+  const auto cloth = makeDrapedCloth<double>(150, 4.0, 1.0, 0.03, 1.0);  // 45k triangles
+  const auto sphere = makeSphere<double>({0, 0, 0}, 1.0, 96, 48);
+  HashedMesh<double> hc(cloth, Transform<double>(), 1), hs(sphere, Transform<double>(), 1);
+  QueryOptions o;
+  o.threads = 1;
+  const QueryResult all = intersectMeshes(hc, hs, o);
+  ASSERT_GT(all.pairs.size(), 200u);
+  // Each CTest case runs in a process of its own: no parallel job has started a worker yet
+  // (run alone by gtest_filter, or after other tests in one process, the check is skipped).
+  const int before = cpu::WorkerPool::shared().workers();
+  o.threads = 8;
+  o.max_pairs = 1;
+  const QueryResult first = intersectMeshes(hc, hs, o);
+  ASSERT_EQ(first.pairs.size(), 1u);
+  if (before == 0) EXPECT_EQ(cpu::WorkerPool::shared().workers(), 0) << "a worker was started";
+  // The caps land before, at and after the first chunks' pairs: equal across thread counts.
+  QueryOptions serial;
+  serial.threads = 1;
+  serial.max_pairs = all.pairs.size() + 1;
+  const std::vector<TrianglePair> order = intersectMeshes(hc, hs, serial).pairs;
+  for (std::size_t k : {std::size_t(1), std::size_t(2), std::size_t(31), std::size_t(64),
+                        std::size_t(200), all.pairs.size(), all.pairs.size() + 1}) {
+    for (int t : {1, 2, 8}) {
+      QueryOptions c;
+      c.threads = t;
+      c.max_pairs = k;
+      const QueryResult r = intersectMeshes(hc, hs, c);
+      ASSERT_EQ(r.pairs.size(), std::min(k, order.size())) << k << " " << t;
+      EXPECT_TRUE(std::equal(r.pairs.begin(), r.pairs.end(), order.begin())) << k << " " << t;
+      EXPECT_EQ(r.complete, k > order.size()) << k << " " << t;
+    }
+  }
+  // An uncapped query on 8 threads does start workers: the check above can fail.
+  if (before == 0) {
+    o.max_pairs = 0;
+    EXPECT_EQ(intersectMeshes(hc, hs, o).pairs.size(), all.pairs.size());
+    EXPECT_GT(cpu::WorkerPool::shared().workers(), 0);
   }
 }
 

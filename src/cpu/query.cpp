@@ -82,9 +82,13 @@ struct VisitOrder {
 /// concatenates them in chunk order. With max_pairs > 0, stops once the completed prefix of
 /// chunks holds max_pairs pairs, so the reported pairs are the first ones of the chunks' order
 /// whatever the thread count. fn(chunk, out, stats) may stop its chunk early once `out` holds
-/// max_pairs pairs.
+/// max_pairs pairs. The first `serial_first` chunks run on the calling thread before any worker
+/// is woken: a capped query that meets its pairs there (a first-contact check) pays for no
+/// thread's wake-up, which cost more than the whole query (an 80k/20k-triangle first contact:
+/// 3.8 us on one thread, 65 us on an H200 host's 16; benchmarks/RESULTS.md, section "Python").
 template <class Fn>
-QueryResult runChunks(std::size_t num_chunks, int threads, std::size_t max_pairs, Fn&& fn) {
+QueryResult runChunks(std::size_t num_chunks, int threads, std::size_t max_pairs, Fn&& fn,
+                      std::size_t serial_first = 0) {
   struct Out {
     std::vector<TrianglePair> pairs;
     QueryStats stats;
@@ -93,13 +97,23 @@ QueryResult runChunks(std::size_t num_chunks, int threads, std::size_t max_pairs
   std::vector<Out> outs(num_chunks);
   std::mutex m;
   std::size_t frontier = 0, prefix_pairs = 0;
-  forEachChunk(num_chunks, threads, [&](std::size_t c) {
-    fn(c, outs[c].pairs, outs[c].stats);
-    std::lock_guard<std::mutex> lock(m);
-    outs[c].done = true;
-    while (frontier < num_chunks && outs[frontier].done) prefix_pairs += outs[frontier++].pairs.size();
-    return !(max_pairs > 0 && prefix_pairs >= max_pairs);
-  });
+  auto capped = [&] { return max_pairs > 0 && prefix_pairs >= max_pairs; };
+  while (frontier < std::min(serial_first, num_chunks) && !capped()) {
+    fn(frontier, outs[frontier].pairs, outs[frontier].stats);
+    outs[frontier].done = true;
+    prefix_pairs += outs[frontier++].pairs.size();
+  }
+  const std::size_t first = frontier;
+  if (!capped() && first < num_chunks) {
+    forEachChunk(num_chunks - first, threads, [&](std::size_t k) {
+      const std::size_t c = first + k;
+      fn(c, outs[c].pairs, outs[c].stats);
+      std::lock_guard<std::mutex> lock(m);
+      outs[c].done = true;
+      while (frontier < num_chunks && outs[frontier].done) prefix_pairs += outs[frontier++].pairs.size();
+      return !capped();
+    });
+  }
   QueryResult res;
   for (std::size_t c = 0; c < num_chunks && outs[c].done; ++c) {
     const Out& o = outs[c];
@@ -240,6 +254,7 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
     if (c < 2 * both) return {c % 2 == 0, c / 2};
     return {chunks_a > chunks_b, c - both};
   };
+  // A sampled (capped) query takes its first chunk of each direction on the calling thread.
   return runChunks(chunks_a + chunks_b, threads, max_pairs,
                    [&](std::size_t c, std::vector<TrianglePair>& out, QueryStats& st) {
     auto emit = [&](TrianglePair p) {
@@ -295,7 +310,7 @@ QueryResult intersectMeshes(const HashedMesh<S>& A, const HashedMesh<S>& B,
         if (!go) return;
       }
     }
-  });
+  }, sampled ? 2 : 0);
 }
 
 template <class S>
@@ -310,6 +325,7 @@ QueryResult computeSelf(const HashedMesh<S>& M, const QueryOptions& options) {
   const std::size_t max_pairs = options.max_pairs;
 
   const VisitOrder order = VisitOrder::of(n, max_pairs);
+  // A sampled (capped) query takes its first chunk on the calling thread.
   return runChunks(order.chunks(), threads, max_pairs,
                    [&](std::size_t c, std::vector<TrianglePair>& out, QueryStats& st) {
     for (std::size_t pos = order.begin(c); pos < order.end(c); ++pos) {
@@ -338,7 +354,7 @@ QueryResult computeSelf(const HashedMesh<S>& M, const QueryOptions& options) {
           st, 0, 0, false);
       if (!go) return;
     }
-  });
+  }, VisitOrder::samples_for(max_pairs) ? 1 : 0);
 }
 
 /// A self query, answered from the mesh's kept result when its geometry did not change (see

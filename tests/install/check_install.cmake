@@ -85,6 +85,35 @@ if(INTERPOSE_APP)
   endif()
 endif()
 
+# 2c. The installed Python module (when built) imports from the prefix's site directory alone
+#     (its rpath finds the installed libkdet_fcl.so) and answers a query.
+if(PYTHON_EXE)
+  file(GLOB_RECURSE py_init "${prefix}/__init__.py")
+  list(FILTER py_init INCLUDE REGEX "/kdet_fcl/__init__.py$")
+  file(GLOB_RECURSE py_ext "${prefix}/_kdet_fcl*.so")
+  if(NOT py_init OR NOT py_ext)
+    message(FATAL_ERROR "check_install: the Python package kdet_fcl was not installed")
+  endif()
+  list(GET py_init 0 py_init)
+  get_filename_component(py_pkg "${py_init}" DIRECTORY)
+  get_filename_component(py_site "${py_pkg}" DIRECTORY)
+  set(py_check "import kdet_fcl, numpy as np; from kdet_fcl import fcl
+assert kdet_fcl.__file__.startswith('${py_site}'), kdet_fcl.__file__
+v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+a = kdet_fcl.Mesh(v, [[0, 1, 2]])
+b = kdet_fcl.Mesh(v, [[0, 1, 2]], rotation=[[1, 0, 0], [0, 0, -1], [0, 1, 0]], translation=[0.1, 0.3, -0.2])
+assert kdet_fcl.intersect(a, b).tolist() == [[0, 0]]
+print('python module OK')")
+  message(STATUS "check_install [python]: PYTHONPATH=${py_site} ${PYTHON_EXE}")
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env "PYTHONPATH=${py_site}" "PYTHONDONTWRITEBYTECODE=1"
+                          "${PYTHON_EXE}" -c "${py_check}"
+                  WORKING_DIRECTORY "${WORK_DIR}"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "python module OK")
+    message(FATAL_ERROR "check_install: the installed Python module failed (exit ${rc}):\n${out}\n${err}")
+  endif()
+endif()
+
 # 3. Configure the consumer against the prefix only (no package registry, no build tree).
 set(configure_args
   -S "${CONSUMER_SOURCE_DIR}" -B "${consumer_build}"

@@ -1,0 +1,830 @@
+// The Python module kdet_fcl (its compiled part, kdet_fcl._kdet_fcl): kDet's meshes and queries
+// on NumPy arrays, and the FCL-facing core under python/kdet_fcl/fcl.py's python-fcl-style API.
+//
+// - Every C++ error reaches Python as a kdet_fcl exception (InvalidInputError is also a
+//   ValueError, MeshFileError an OSError, BackendUnavailableError and CudaError RuntimeErrors);
+//   bad arrays (wrong shape, non-integer indices, negative indices) are InvalidInputErrors raised
+//   here, before any C++ object changes.
+// - Queries release the GIL. A mesh's wrapper holds a shared mutex: queries take it shared,
+//   changes (new vertices, pose, topology) exclusively, so Python threads may query and change
+//   meshes concurrently without a data race. A lock holder never needs the GIL.
+// - Pairs come back as (k, 2) uint32 arrays that own the query's vector (no copy).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cone.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/ellipsoid.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "kdet_fcl/kdet_fcl.h"
+
+namespace py = pybind11;
+using namespace kdet_fcl;
+
+namespace {
+
+static_assert(sizeof(TrianglePair) == 2 * sizeof(std::uint32_t), "pairs are read as (k, 2) arrays");
+
+std::string shapeOf(const py::array& a) {
+  std::ostringstream s;
+  s << '(';
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) s << (i ? ", " : "") << a.shape(i);
+  s << (a.ndim() == 1 ? ",)" : ")");
+  return s.str();
+}
+
+/// An (n, 3) array of numbers as Vec3<S> (any real or integer dtype, any layout); an empty
+/// array of any shape is no row.
+template <class S>
+std::vector<Vec3<S>> toPoints(const py::handle& obj, const std::string& what) {
+  py::array any = py::array::ensure(obj);
+  if (!any) throw InvalidInputError(what + ": expected an (n, 3) array of numbers");
+  if (any.size() == 0) return {};
+  const char kind = any.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u')
+    throw InvalidInputError(what + ": expected numbers, got dtype " +
+                            std::string(py::str(any.dtype())));
+  auto a = py::array_t<S, py::array::c_style | py::array::forcecast>::ensure(any);
+  if (!a) throw InvalidInputError(what + ": expected an (n, 3) array of numbers");
+  if (a.ndim() != 2 || a.shape(1) != 3)
+    throw InvalidInputError(what + ": expected an (n, 3) array, got shape " + shapeOf(a));
+  std::vector<Vec3<S>> out(static_cast<std::size_t>(a.shape(0)));
+  const S* p = a.data();
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+  return out;
+}
+
+/// An (m, 3) array of integer vertex indices in [0, 2^32 - 1); an empty array of any shape is no
+/// triangle. Whether an index names a vertex is the mesh's own check (TriangleMesh::validate).
+std::vector<Triangle> toTriangles(const py::handle& obj, const std::string& what) {
+  py::array any = py::array::ensure(obj);
+  if (!any) throw InvalidInputError(what + ": expected an (m, 3) array of vertex indices");
+  if (any.size() == 0) return {};
+  const char kind = any.dtype().kind();
+  if (kind != 'i' && kind != 'u')
+    throw InvalidInputError(what + ": vertex indices must be integers, got dtype " +
+                            std::string(py::str(any.dtype())));
+  if (any.ndim() != 2 || any.shape(1) != 3)
+    throw InvalidInputError(what + ": expected an (m, 3) array, got shape " + shapeOf(any));
+  std::vector<Triangle> out(static_cast<std::size_t>(any.shape(0)));
+  auto take = [&](std::size_t i, int c, long double v) {
+    if (!(v >= 0 && v < 4294967295.0L)) {
+      std::ostringstream s;
+      s << what << ": triangle " << i << " has vertex index " << static_cast<long long>(v)
+        << ", outside [0, 4294967295)";
+      throw InvalidInputError(s.str());
+    }
+    out[i][c] = static_cast<std::uint32_t>(v);
+  };
+  if (kind == 'u') {
+    auto a = py::array_t<unsigned long long, py::array::c_style | py::array::forcecast>::ensure(any);
+    for (std::size_t i = 0; i < out.size(); ++i)
+      for (int c = 0; c < 3; ++c) take(i, c, static_cast<long double>(a.data()[3 * i + c]));
+  } else {
+    auto a = py::array_t<long long, py::array::c_style | py::array::forcecast>::ensure(any);
+    for (std::size_t i = 0; i < out.size(); ++i)
+      for (int c = 0; c < 3; ++c) take(i, c, static_cast<long double>(a.data()[3 * i + c]));
+  }
+  return out;
+}
+
+/// A 3x3 rotation (row-major as NumPy writes it) and a translation of 3 numbers; None is the
+/// identity and zero. Rigidity is the mesh's check (validatePose).
+template <class S>
+Transform<S> toPose(const py::handle& rotation, const py::handle& translation,
+                    const std::string& what) {
+  Transform<S> T;
+  if (!rotation.is_none()) {
+    auto r = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(rotation);
+    if (!r || r.ndim() != 2 || r.shape(0) != 3 || r.shape(1) != 3)
+      throw InvalidInputError(what + ": the rotation must be a 3x3 array");
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) T.R[i][j] = static_cast<S>(r.at(i, j));
+  }
+  if (!translation.is_none()) {
+    auto t = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(translation);
+    if (!t || t.size() != 3 || t.ndim() > 2)
+      throw InvalidInputError(what + ": the translation must be 3 numbers");
+    T.t = {static_cast<S>(t.data()[0]), static_cast<S>(t.data()[1]), static_cast<S>(t.data()[2])};
+  }
+  return T;
+}
+
+/// The query's pairs as a (k, 2) uint32 array that owns their vector.
+py::array_t<std::uint32_t> pairsArray(std::vector<TrianglePair>&& pairs) {
+  auto* held = new std::vector<TrianglePair>(std::move(pairs));
+  py::capsule owner(held, [](void* p) { delete static_cast<std::vector<TrianglePair>*>(p); });
+  const auto k = static_cast<py::ssize_t>(held->size());
+  return py::array_t<std::uint32_t>(
+      {k, py::ssize_t(2)},
+      {static_cast<py::ssize_t>(sizeof(TrianglePair)), static_cast<py::ssize_t>(sizeof(std::uint32_t))},
+      reinterpret_cast<const std::uint32_t*>(held->data()), owner);
+}
+
+Backend toBackend(const std::string& name) {
+  if (name == "cpu") return Backend::Cpu;
+  if (name == "cuda") return Backend::Cuda;
+  if (name == "auto") return Backend::Auto;
+  throw InvalidInputError("backend must be 'cpu', 'cuda' or 'auto', not '" + name + "'");
+}
+
+Predicate toPredicate(const std::string& name) {
+  if (name == "exact") return Predicate::Exact;
+  if (name == "double") return Predicate::Double;
+  if (name == "float") return Predicate::Float;
+  throw InvalidInputError("predicate must be 'exact', 'double' or 'float', not '" + name + "'");
+}
+
+QueryOptions toOptions(long long max_pairs, const std::string& backend, long long threads,
+                       const std::string& predicate) {
+  if (max_pairs < 0) throw InvalidInputError("max_pairs must be >= 0 (0: every pair)");
+  if (threads < 0 || threads > 4096)
+    throw InvalidInputError("threads must be in [0, 4096] (0: every hardware thread)");
+  QueryOptions o;
+  o.max_pairs = static_cast<std::size_t>(max_pairs);
+  o.threads = static_cast<int>(threads);
+  o.backend = toBackend(backend);
+  o.predicate = toPredicate(predicate);
+  return o;
+}
+
+/// A HashedMesh and the lock that orders Python threads' queries (shared) and changes
+/// (exclusive) on it.
+template <class S>
+struct PyMesh {
+  std::unique_ptr<HashedMesh<S>> mesh;
+  mutable std::shared_mutex mutex;
+};
+
+/// Shared locks on one or two meshes (one when they are the same), taken without the GIL.
+template <class S>
+struct ReadLocks {
+  std::shared_lock<std::shared_mutex> a, b;
+  ReadLocks(const PyMesh<S>& x, const PyMesh<S>* y) : a(x.mutex) {
+    if (y && y != &x) b = std::shared_lock<std::shared_mutex>(y->mutex);
+  }
+};
+
+template <class S>
+py::array pointsArray(const std::vector<Vec3<S>>& v) {
+  py::array_t<S> out({static_cast<py::ssize_t>(v.size()), py::ssize_t(3)});
+  S* p = out.mutable_data();
+  for (std::size_t i = 0; i < v.size(); ++i) p[3 * i] = v[i].x, p[3 * i + 1] = v[i].y, p[3 * i + 2] = v[i].z;
+  return out;
+}
+
+py::array trianglesArray(const std::vector<Triangle>& t) {
+  py::array_t<std::uint32_t> out({static_cast<py::ssize_t>(t.size()), py::ssize_t(3)});
+  std::uint32_t* p = out.mutable_data();
+  for (std::size_t i = 0; i < t.size(); ++i)
+    for (int c = 0; c < 3; ++c) p[3 * i + c] = t[i][c];
+  return out;
+}
+
+template <class S>
+py::dict kfreeDict(const KFreeStats& k) {
+  py::dict d;
+  d["triangles"] = k.triangles;
+  d["k"] = k.k;
+  d["mean"] = k.mean;
+  d["sd"] = k.sd;
+  d["max_count"] = k.max_count;
+  d["adjacent_mean"] = k.adjacent_mean;
+  d["adjacent_share"] = k.adjacent_share;
+  d["height"] = k.height;
+  if (!k.counts.empty() || k.triangles == 0) {
+    py::array_t<std::uint32_t> c(static_cast<py::ssize_t>(k.counts.size()));
+    std::copy(k.counts.begin(), k.counts.end(), c.mutable_data());
+    d["counts"] = c;
+  }
+  return d;
+}
+
+template <class S>
+void bindMesh(py::module_& m, const char* name, const char* dtype) {
+  using M = PyMesh<S>;
+  const std::string cls = name;
+  py::class_<M>(m, name,
+                (std::string("A triangle mesh and its hierarchical hash (") + dtype +
+                 " coordinates): rigid (set_pose), deforming (update_vertices) or changing "
+                 "topology (set_mesh).")
+                    .c_str())
+      .def(py::init([cls](const py::object& vertices, const py::object& triangles,
+                          const py::object& rotation, const py::object& translation,
+                          long long threads) {
+             if (threads < 0 || threads > 4096)
+               throw InvalidInputError(cls + ": threads must be in [0, 4096]");
+             TriangleMesh<S> mesh;
+             mesh.vertices = toPoints<S>(vertices, cls + " vertices");
+             mesh.triangles = toTriangles(triangles, cls + " triangles");
+             const Transform<S> pose = toPose<S>(rotation, translation, cls);
+             auto out = std::make_unique<M>();
+             py::gil_scoped_release nogil;
+             out->mesh = std::make_unique<HashedMesh<S>>(std::move(mesh), pose, int(threads));
+             return out;
+           }),
+           py::arg("vertices"), py::arg("triangles"), py::kw_only(),
+           py::arg("rotation") = py::none(), py::arg("translation") = py::none(),
+           py::arg("threads") = 0)
+      .def_property_readonly("num_vertices", [](const M& self) {
+        std::shared_lock<std::shared_mutex> lk(self.mutex);
+        return self.mesh->numVertices();
+      })
+      .def_property_readonly("num_triangles", [](const M& self) {
+        std::shared_lock<std::shared_mutex> lk(self.mutex);
+        return self.mesh->numTriangles();
+      })
+      .def_property_readonly("vertices", [](const M& self) {
+        std::shared_lock<std::shared_mutex> lk(self.mutex);
+        return pointsArray(self.mesh->mesh().vertices);
+      }, "A copy of the vertex positions, (n, 3), in the mesh's own frame.")
+      .def_property_readonly("triangles", [](const M& self) {
+        std::shared_lock<std::shared_mutex> lk(self.mutex);
+        return trianglesArray(self.mesh->mesh().triangles);
+      }, "A copy of the triangles' vertex indices, (m, 3) uint32.")
+      .def_property_readonly("pose", [](const M& self) {
+        std::shared_lock<std::shared_mutex> lk(self.mutex);
+        const Transform<S>& T = self.mesh->pose();
+        py::array_t<double> R({3, 3}), t(3);
+        for (int i = 0; i < 3; ++i) {
+          for (int j = 0; j < 3; ++j) R.mutable_at(i, j) = T.R[i][j];
+        }
+        t.mutable_at(0) = T.t.x, t.mutable_at(1) = T.t.y, t.mutable_at(2) = T.t.z;
+        return py::make_tuple(R, t);
+      }, "(rotation 3x3, translation (3,)): where the mesh's frame lies in the world.")
+      .def("set_pose", [cls](M& self, const py::object& rotation, const py::object& translation) {
+        const Transform<S> pose = toPose<S>(rotation, translation, cls + ".set_pose");
+        py::gil_scoped_release nogil;
+        std::unique_lock<std::shared_mutex> lk(self.mutex);
+        self.mesh->setPose(pose);
+      }, py::arg("rotation") = py::none(), py::arg("translation") = py::none(),
+         "A rigid motion: no re-hash. None is the identity rotation / zero translation.")
+      .def("update_vertices", [cls](M& self, const py::object& vertices) {
+        std::vector<Vec3<S>> v = toPoints<S>(vertices, cls + ".update_vertices");
+        py::gil_scoped_release nogil;
+        std::unique_lock<std::shared_mutex> lk(self.mutex);
+        self.mesh->updateVertices(v);
+      }, py::arg("vertices"),
+         "New positions for the same vertices (a deformation): the next query re-hashes.")
+      .def("set_mesh", [cls](M& self, const py::object& vertices, const py::object& triangles) {
+        TriangleMesh<S> mesh;
+        mesh.vertices = toPoints<S>(vertices, cls + ".set_mesh vertices");
+        mesh.triangles = toTriangles(triangles, cls + ".set_mesh triangles");
+        py::gil_scoped_release nogil;
+        std::unique_lock<std::shared_mutex> lk(self.mutex);
+        self.mesh->setMesh(std::move(mesh));
+      }, py::arg("vertices"), py::arg("triangles"),
+         "New topology (fracture, remeshing): the next query rebuilds.")
+      .def("stats", [](const M& self) {
+        HierarchyStats s;
+        {
+          py::gil_scoped_release nogil;
+          std::shared_lock<std::shared_mutex> lk(self.mutex);
+          s = self.mesh->stats();
+        }
+        py::dict d;
+        d["triangles"] = s.triangles;
+        d["levels"] = s.levels;
+        d["height"] = s.height;
+        d["d_min"] = s.d_min;
+        d["d_max"] = s.d_max;
+        d["cell_size0"] = s.cell_size0;
+        d["cells"] = s.cells;
+        d["entries"] = s.entries;
+        d["max_cell_load"] = s.max_cell_load;
+        d["memory_bytes"] = s.memory_bytes;
+        return d;
+      }, "The hierarchy's statistics (builds the CPU hash if it is not current).")
+      .def("__repr__", [cls](const M& self) {
+        std::shared_lock<std::shared_mutex> lk(self.mutex);
+        return "<kdet_fcl." + cls + ": " + std::to_string(self.mesh->numTriangles()) +
+               " triangles, " + std::to_string(self.mesh->numVertices()) + " vertices>";
+      });
+
+  m.def("intersect", [](const M& a, const M& b, long long max_pairs, const std::string& backend,
+                        long long threads, const std::string& predicate) {
+    const QueryOptions o = toOptions(max_pairs, backend, threads, predicate);
+    QueryResult r;
+    {
+      py::gil_scoped_release nogil;
+      ReadLocks<S> lk(a, &b);
+      r = intersectMeshes(*a.mesh, *b.mesh, o);
+    }
+    return pairsArray(std::move(r.pairs));
+  }, py::arg("a"), py::arg("b"), py::kw_only(), py::arg("max_pairs") = 0,
+     py::arg("backend") = "cpu", py::arg("threads") = 0, py::arg("predicate") = "exact");
+
+  m.def("intersect_self", [](const M& a, long long max_pairs, const std::string& backend,
+                             long long threads, const std::string& predicate) {
+    const QueryOptions o = toOptions(max_pairs, backend, threads, predicate);
+    QueryResult r;
+    {
+      py::gil_scoped_release nogil;
+      ReadLocks<S> lk(a, nullptr);
+      r = intersectSelf(*a.mesh, o);
+    }
+    return pairsArray(std::move(r.pairs));
+  }, py::arg("mesh"), py::kw_only(), py::arg("max_pairs") = 0, py::arg("backend") = "cpu",
+     py::arg("threads") = 0, py::arg("predicate") = "exact");
+
+  m.def("intersect_all", [](const M& a, const M& b, const std::string& backend, long long threads,
+                            const std::string& predicate) {
+    const QueryOptions o = toOptions(0, backend, threads, predicate);
+    AllPairsResult r;
+    {
+      py::gil_scoped_release nogil;
+      ReadLocks<S> lk(a, &b);
+      r = intersectAll(*a.mesh, *b.mesh, o);
+    }
+    return py::make_tuple(pairsArray(std::move(r.self_a.pairs)),
+                          pairsArray(std::move(r.self_b.pairs)),
+                          pairsArray(std::move(r.inter.pairs)));
+  }, py::arg("a"), py::arg("b"), py::kw_only(), py::arg("backend") = "cpu",
+     py::arg("threads") = 0, py::arg("predicate") = "exact");
+
+  m.def("intersects", [](const M& a, const M& b, const std::string& backend, long long threads) {
+    const QueryOptions o = toOptions(1, backend, threads, "exact");
+    py::gil_scoped_release nogil;
+    ReadLocks<S> lk(a, &b);
+    return meshesIntersect(*a.mesh, *b.mesh, o);
+  }, py::arg("a"), py::arg("b"), py::kw_only(), py::arg("backend") = "cpu",
+     py::arg("threads") = 0);
+
+  m.def("brute_force_intersect", [](const M& a, const M& b, const std::string& predicate) {
+    const Predicate p = toPredicate(predicate);
+    std::vector<TrianglePair> r;
+    {
+      py::gil_scoped_release nogil;
+      ReadLocks<S> lk(a, &b);
+      r = bruteForceIntersectMeshes(a.mesh->mesh(), a.mesh->pose(), b.mesh->mesh(),
+                                    b.mesh->pose(), p);
+    }
+    return pairsArray(std::move(r));
+  }, py::arg("a"), py::arg("b"), py::kw_only(), py::arg("predicate") = "exact");
+
+  m.def("brute_force_intersect_self", [](const M& a, const std::string& predicate) {
+    const Predicate p = toPredicate(predicate);
+    std::vector<TrianglePair> r;
+    {
+      py::gil_scoped_release nogil;
+      ReadLocks<S> lk(a, nullptr);
+      r = bruteForceIntersectSelf(a.mesh->mesh(), p);
+    }
+    return pairsArray(std::move(r));
+  }, py::arg("mesh"), py::kw_only(), py::arg("predicate") = "exact");
+
+  m.def("analyze_kfree", [](const M& a, bool keep_counts, long long threads) {
+    if (threads < 0 || threads > 4096) throw InvalidInputError("threads must be in [0, 4096]");
+    KFreeOptions o;
+    o.keep_counts = keep_counts;
+    o.threads = int(threads);
+    KFreeStats k;
+    {
+      py::gil_scoped_release nogil;
+      ReadLocks<S> lk(a, nullptr);
+      k = analyzeKFree(a.mesh->mesh(), o);
+    }
+    return kfreeDict<S>(k);
+  }, py::arg("mesh"), py::kw_only(), py::arg("keep_counts") = false, py::arg("threads") = 0);
+}
+
+// ---- The FCL-facing core (python/kdet_fcl/fcl.py wraps it in python-fcl's API) ----
+
+using Geometry = fcl::CollisionGeometryd;
+
+/// A python-fcl style BVHModel: kdet_fcl::Meshd (an fcl::BVHModel<OBBRSS>), whose endModel also
+/// builds kDet's hash. Error codes raise as python-fcl's _check_ret_value does.
+bool checkBvh(int code) {
+  switch (code) {
+    case fcl::BVH_OK: return true;
+    case fcl::BVH_ERR_MODEL_OUT_OF_MEMORY: throw std::bad_alloc();  // MemoryError
+    case fcl::BVH_ERR_BUILD_OUT_OF_SEQUENCE:
+      throw InvalidInputError("BVH construction does not follow correct sequence");
+    case fcl::BVH_ERR_BUILD_EMPTY_MODEL: throw InvalidInputError("BVH geometry is not prepared");
+    case fcl::BVH_ERR_BUILD_EMPTY_PREVIOUS_FRAME:
+      throw InvalidInputError("BVH geometry in previous frame is not prepared");
+    case fcl::BVH_ERR_UNSUPPORTED_FUNCTION: throw InvalidInputError("BVH function is not supported");
+    case fcl::BVH_ERR_UNUPDATED_MODEL: throw InvalidInputError("BVH model update failed");
+    case fcl::BVH_ERR_INCORRECT_DATA: throw InvalidInputError("BVH data is not valid");
+    default: throw InvalidInputError("BVH call failed with code " + std::to_string(code));
+  }
+}
+
+fcl::Vector3d toVec3(const py::handle& p, const std::string& what) {
+  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(p);
+  if (!a || a.size() != 3) throw InvalidInputError(what + ": expected 3 numbers");
+  return {a.data()[0], a.data()[1], a.data()[2]};
+}
+
+std::vector<fcl::Vector3d> toFclPoints(const py::handle& p, const std::string& what) {
+  std::vector<Vec3<double>> v = toPoints<double>(p, what);
+  std::vector<fcl::Vector3d> out(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) out[i] = {v[i].x, v[i].y, v[i].z};
+  return out;
+}
+
+fcl::Transform3d toFclTransform(const py::handle& rotation, const py::handle& translation) {
+  const Transform<double> T = toPose<double>(rotation, translation, "CollisionObject");
+  fcl::Transform3d tf = fcl::Transform3d::Identity();
+  fcl::Matrix3d R;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) R(i, j) = T.R[i][j];
+  tf.linear() = R;
+  tf.translation() = fcl::Vector3d(T.t.x, T.t.y, T.t.z);
+  return tf;
+}
+
+/// An fcl::CollisionObjectd over a geometry the Python object keeps alive (the holder).
+struct ObjectCore {
+  std::shared_ptr<Geometry> geometry;
+  std::unique_ptr<fcl::CollisionObjectd> object;
+};
+
+/// A BVHModel that is being built or updated cannot be queried (FCL's traversal would read
+/// half-written arrays).
+void requireBuilt(const Geometry* g, const std::string& what) {
+  if (auto* m = dynamic_cast<const Meshd*>(g))
+    if (m->build_state != fcl::BVH_BUILD_STATE_PROCESSED &&
+        m->build_state != fcl::BVH_BUILD_STATE_UPDATED)
+      throw InvalidInputError(what + ": a BVHModel is not built (call endModel, or "
+                              "endUpdateModel after beginUpdateModel)");
+}
+
+/// Meshes held in MeshMode::KdetOnly refit FCL's BVH before FCL's own query reads it.
+void refitForFcl(const Geometry* g) {
+  if (auto* m = dynamic_cast<const Meshd*>(g))
+    if (m->mode() == MeshMode::KdetOnly) const_cast<Meshd*>(m)->refitFcl();
+}
+
+py::tuple contactsOf(fcl::CollisionResultd& result, const Geometry* first, std::size_t n) {
+  std::vector<fcl::Contactd> cs;
+  result.getContacts(cs);
+  const auto k = static_cast<py::ssize_t>(cs.size());
+  py::array_t<long long> ids({k, py::ssize_t(2)});
+  py::array_t<double> normal({k, py::ssize_t(3)}), pos({k, py::ssize_t(3)}), depth(k);
+  py::array_t<bool> swapped(k);
+  for (py::ssize_t i = 0; i < k; ++i) {
+    const fcl::Contactd& c = cs[static_cast<std::size_t>(i)];
+    ids.mutable_at(i, 0) = c.b1, ids.mutable_at(i, 1) = c.b2;
+    for (int j = 0; j < 3; ++j) normal.mutable_at(i, j) = c.normal[j], pos.mutable_at(i, j) = c.pos[j];
+    depth.mutable_at(i) = c.penetration_depth;
+    swapped.mutable_at(i) = c.o1 != first;
+  }
+  return py::make_tuple(n, result.isCollision(), ids, normal, pos, depth, swapped);
+}
+
+fcl::CollisionRequestd toRequest(long long num_max_contacts, bool enable_contact) {
+  if (num_max_contacts < 0) throw InvalidInputError("num_max_contacts must be >= 0");
+  return fcl::CollisionRequestd(static_cast<std::size_t>(num_max_contacts), enable_contact);
+}
+
+/// The core of fcl.py's collide: kdet_fcl::collide ("kdet") or FCL 0.7's fcl::collide ("fcl").
+py::tuple collideCore(const ObjectCore& a, const ObjectCore& b, long long num_max_contacts,
+                      bool enable_contact, const std::string& engine) {
+  const fcl::CollisionRequestd request = toRequest(num_max_contacts, enable_contact);
+  fcl::CollisionResultd result;
+  std::size_t n = 0;
+  requireBuilt(a.geometry.get(), "collide");
+  requireBuilt(b.geometry.get(), "collide");
+  if (engine == "kdet") {
+    py::gil_scoped_release nogil;
+    n = kdet_fcl::collide(a.object.get(), b.object.get(), request, result);
+  } else if (engine == "fcl") {
+    refitForFcl(a.geometry.get());
+    refitForFcl(b.geometry.get());
+    py::gil_scoped_release nogil;
+    n = fcl::collide(a.object.get(), b.object.get(), request, result);
+  } else {
+    throw InvalidInputError("engine must be 'kdet' or 'fcl', not '" + engine + "'");
+  }
+  return contactsOf(result, a.geometry.get(), n);
+}
+
+py::tuple selfCollideCore(const ObjectCore& a, long long num_max_contacts, bool enable_contact) {
+  const fcl::CollisionRequestd request = toRequest(num_max_contacts, enable_contact);
+  fcl::CollisionResultd result;
+  std::size_t n = 0;
+  requireBuilt(a.geometry.get(), "self_collide");
+  {
+    py::gil_scoped_release nogil;
+    n = kdet_fcl::selfCollide(a.object.get(), request, result);
+  }
+  return contactsOf(result, a.geometry.get(), n);
+}
+
+/// The core of fcl.py's distance (FCL's own, through kdet_fcl::distance).
+py::tuple distanceCore(const ObjectCore& a, const ObjectCore& b, bool nearest, bool is_signed) {
+  fcl::DistanceRequestd request(nearest);
+  request.enable_signed_distance = is_signed;
+  fcl::DistanceResultd result;
+  requireBuilt(a.geometry.get(), "distance");
+  requireBuilt(b.geometry.get(), "distance");
+  refitForFcl(a.geometry.get());
+  refitForFcl(b.geometry.get());
+  double d = 0;
+  {
+    py::gil_scoped_release nogil;
+    d = kdet_fcl::distance(a.object.get(), b.object.get(), request, result);
+  }
+  py::array_t<double> p0(3), p1(3);
+  for (int j = 0; j < 3; ++j)
+    p0.mutable_at(j) = result.nearest_points[0][j], p1.mutable_at(j) = result.nearest_points[1][j];
+  const bool swapped = result.o1 != a.geometry.get();
+  return py::make_tuple(d, result.min_distance, p0, p1, result.b1, result.b2, swapped);
+}
+
+/// A DynamicAABBTree manager whose callbacks are Python callables; the objects' user data is
+/// their ObjectCore, which casts back to the registered Python object (fcl.py keeps it alive).
+struct ManagerCore {
+  fcl::DynamicAABBTreeCollisionManagerd manager;
+};
+
+struct CallbackData {
+  py::object callback;
+  py::object cdata;
+  std::unique_ptr<py::error_already_set> error;
+};
+
+py::object pythonObjectOf(fcl::CollisionObjectd* o) {
+  auto* core = static_cast<ObjectCore*>(o->getUserData());
+  return py::cast(core, py::return_value_policy::reference);
+}
+
+bool managerCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data) {
+  auto* d = static_cast<CallbackData*>(data);
+  if (d->error) return true;
+  try {
+    return py::cast<bool>(d->callback(pythonObjectOf(o1), pythonObjectOf(o2), d->cdata));
+  } catch (py::error_already_set& e) {
+    d->error = std::make_unique<py::error_already_set>(std::move(e));
+    return true;  // stop the traversal; the error is raised when it returns
+  }
+}
+
+std::vector<fcl::CollisionObjectd*> objectsOf(const std::vector<ObjectCore*>& cores) {
+  std::vector<fcl::CollisionObjectd*> out;
+  out.reserve(cores.size());
+  for (ObjectCore* c : cores) {
+    if (!c) throw InvalidInputError("a collision manager cannot hold None");
+    out.push_back(c->object.get());
+  }
+  return out;
+}
+
+void bindFclCore(py::module_& m) {
+  py::class_<Geometry, std::shared_ptr<Geometry>>(m, "CollisionGeometry",
+      "A geometry FCL collides (its subclasses: BVHModel and the primitive shapes).")
+      .def("getNodeType", [](const Geometry& g) { return int(g.getNodeType()); })
+      .def("getObjectType", [](const Geometry& g) { return int(g.getObjectType()); })
+      .def("computeLocalAABB", &Geometry::computeLocalAABB)
+      .def_property_readonly("aabb_center", [](const Geometry& g) {
+        py::array_t<double> c(3);
+        for (int j = 0; j < 3; ++j) c.mutable_at(j) = g.aabb_center[j];
+        return c;
+      });
+
+  py::class_<Meshd, Geometry, std::shared_ptr<Meshd>>(m, "BVHModel",
+      "python-fcl's BVHModel (an OBBRSS mesh) whose endModel also builds kDet's hash; "
+      "kdet_only=True skips FCL's refit on updates (FCL's own queries refit it on demand).")
+      .def(py::init([](bool kdet_only) {
+             return std::make_shared<Meshd>(kdet_only ? MeshMode::KdetOnly : MeshMode::Fcl);
+           }), py::kw_only(), py::arg("kdet_only") = false)
+      .def("beginModel", [](Meshd& self, long long num_tris, long long num_vertices) {
+        if (num_tris < 0 || num_vertices < 0 || num_tris > std::numeric_limits<int>::max() ||
+            num_vertices > std::numeric_limits<int>::max())
+          throw InvalidInputError("beginModel: counts must be in [0, 2^31)");
+        return self.beginModel(int(num_tris), int(num_vertices));
+      }, py::arg("num_tris_") = 0, py::arg("num_vertices_") = 0)
+      .def("endModel", [](Meshd& self) { return self.endModel(); })
+      .def("addVertex", [](Meshd& self, double x, double y, double z) {
+        return checkBvh(self.addVertex(fcl::Vector3d(x, y, z)));
+      })
+      .def("addTriangle", [](Meshd& self, const py::object& a, const py::object& b,
+                             const py::object& c) {
+        return checkBvh(self.addTriangle(toVec3(a, "addTriangle"), toVec3(b, "addTriangle"),
+                                         toVec3(c, "addTriangle")));
+      })
+      .def("addSubModel", [](Meshd& self, const py::object& verts, const py::object& triangles) {
+        const std::vector<fcl::Vector3d> ps = toFclPoints(verts, "addSubModel vertices");
+        const std::vector<Triangle> ts = toTriangles(triangles, "addSubModel triangles");
+        // FCL's addSubModel offsets the indices by the vertices it already holds and does not
+        // check them: indices outside this call's vertices would read past them later.
+        std::vector<fcl::Triangle> ft(ts.size());
+        for (std::size_t i = 0; i < ts.size(); ++i) {
+          for (int c = 0; c < 3; ++c)
+            if (ts[i][c] >= ps.size())
+              throw InvalidInputError("addSubModel: triangle " + std::to_string(i) +
+                                      " has vertex index " + std::to_string(ts[i][c]) + ", but " +
+                                      std::to_string(ps.size()) + " vertices were given");
+          ft[i] = fcl::Triangle(ts[i][0], ts[i][1], ts[i][2]);
+        }
+        if (ps.empty() && ft.empty()) return true;
+        return checkBvh(self.addSubModel(ps, ft));
+      })
+      .def("beginUpdateModel", [](Meshd& self) { return checkBvh(self.beginUpdateModel()); })
+      .def("updateVertex", [](Meshd& self, double x, double y, double z) {
+        return checkBvh(self.updateVertex(fcl::Vector3d(x, y, z)));
+      })
+      .def("updateSubModel", [](Meshd& self, const py::object& verts) {
+        return checkBvh(self.updateSubModel(toFclPoints(verts, "updateSubModel")));
+      })
+      .def("endUpdateModel", [](Meshd& self, bool refit, bool bottomup) {
+        return checkBvh(self.endUpdateModel(refit, bottomup));
+      }, py::arg("refit") = true, py::arg("bottomup") = true)
+      .def("num_tries_", [](const Meshd& self) { return self.num_tris; })
+      .def_property_readonly("num_tris", [](const Meshd& self) { return self.num_tris; })
+      .def_property_readonly("num_vertices", [](const Meshd& self) { return self.num_vertices; })
+      .def("buildState", [](const Meshd& self) { return int(self.build_state); });
+
+  py::class_<fcl::Boxd, Geometry, std::shared_ptr<fcl::Boxd>>(m, "Box")
+      .def(py::init<double, double, double>(), py::arg("x"), py::arg("y"), py::arg("z"))
+      .def_property_readonly("side", [](const fcl::Boxd& b) {
+        py::array_t<double> s(3);
+        for (int j = 0; j < 3; ++j) s.mutable_at(j) = b.side[j];
+        return s;
+      });
+  py::class_<fcl::Sphered, Geometry, std::shared_ptr<fcl::Sphered>>(m, "Sphere")
+      .def(py::init<double>(), py::arg("radius"))
+      .def_readonly("radius", &fcl::Sphered::radius);
+  py::class_<fcl::Ellipsoidd, Geometry, std::shared_ptr<fcl::Ellipsoidd>>(m, "Ellipsoid")
+      .def(py::init<double, double, double>(), py::arg("a"), py::arg("b"), py::arg("c"));
+  py::class_<fcl::Capsuled, Geometry, std::shared_ptr<fcl::Capsuled>>(m, "Capsule")
+      .def(py::init<double, double>(), py::arg("radius"), py::arg("lz"))
+      .def_readonly("radius", &fcl::Capsuled::radius)
+      .def_readonly("lz", &fcl::Capsuled::lz);
+  py::class_<fcl::Cylinderd, Geometry, std::shared_ptr<fcl::Cylinderd>>(m, "Cylinder")
+      .def(py::init<double, double>(), py::arg("radius"), py::arg("lz"))
+      .def_readonly("radius", &fcl::Cylinderd::radius)
+      .def_readonly("lz", &fcl::Cylinderd::lz);
+  py::class_<fcl::Coned, Geometry, std::shared_ptr<fcl::Coned>>(m, "Cone")
+      .def(py::init<double, double>(), py::arg("radius"), py::arg("lz"))
+      .def_readonly("radius", &fcl::Coned::radius)
+      .def_readonly("lz", &fcl::Coned::lz);
+
+  py::class_<ObjectCore>(m, "_ObjectCore")
+      .def(py::init([](std::shared_ptr<Geometry> geometry, const py::object& rotation,
+                       const py::object& translation) {
+             if (!geometry) throw InvalidInputError("CollisionObject: the geometry is None");
+             requireBuilt(geometry.get(), "CollisionObject");
+             auto core = std::make_unique<ObjectCore>();
+             core->geometry = geometry;
+             core->object = std::make_unique<fcl::CollisionObjectd>(
+                 geometry, toFclTransform(rotation, translation));
+             core->object->setUserData(core.get());
+             return core;
+           }), py::arg("geometry"), py::arg("rotation") = py::none(),
+           py::arg("translation") = py::none())
+      .def("_set_transform", [](ObjectCore& self, const py::object& rotation,
+                                const py::object& translation) {
+        self.object->setTransform(toFclTransform(rotation, translation));
+        self.object->computeAABB();
+      })
+      .def("_rotation", [](const ObjectCore& self) {
+        py::array_t<double> R({3, 3});
+        const fcl::Matrix3d& M = self.object->getRotation();
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) R.mutable_at(i, j) = M(i, j);
+        return R;
+      })
+      .def("_translation", [](const ObjectCore& self) {
+        py::array_t<double> t(3);
+        const fcl::Vector3d& v = self.object->getTranslation();
+        for (int j = 0; j < 3; ++j) t.mutable_at(j) = v[j];
+        return t;
+      })
+      .def("getObjectType", [](const ObjectCore& self) { return int(self.object->getObjectType()); })
+      .def("getNodeType", [](const ObjectCore& self) { return int(self.object->getNodeType()); });
+
+  m.def("_collide", &collideCore);
+  m.def("_self_collide", &selfCollideCore);
+  m.def("_distance", &distanceCore);
+
+  py::class_<ManagerCore>(m, "_ManagerCore")
+      .def(py::init<>())
+      .def("_register", [](ManagerCore& self, const std::vector<ObjectCore*>& objs) {
+        std::vector<fcl::CollisionObjectd*> os = objectsOf(objs);
+        self.manager.registerObjects(os);
+      })
+      .def("_unregister", [](ManagerCore& self, ObjectCore* o) {
+        if (o) self.manager.unregisterObject(o->object.get());
+      })
+      .def("_update", [](ManagerCore& self, const std::vector<ObjectCore*>& objs) {
+        if (objs.empty()) self.manager.update();
+        else {
+          std::vector<fcl::CollisionObjectd*> os = objectsOf(objs);
+          self.manager.update(os);
+        }
+      })
+      .def("setup", [](ManagerCore& self) { self.manager.setup(); })
+      .def("clear", [](ManagerCore& self) { self.manager.clear(); })
+      .def("empty", [](const ManagerCore& self) { return self.manager.empty(); })
+      .def("size", [](const ManagerCore& self) { return self.manager.size(); })
+      .def("_collide", [](ManagerCore& self, const py::object& cdata, const py::object& callback) {
+        CallbackData d{callback, cdata, nullptr};
+        self.manager.collide(&d, managerCallback);
+        if (d.error) throw std::move(*d.error);
+      })
+      .def("_collide_object", [](ManagerCore& self, ObjectCore& o, const py::object& cdata,
+                                 const py::object& callback) {
+        CallbackData d{callback, cdata, nullptr};
+        self.manager.collide(o.object.get(), &d, managerCallback);
+        if (d.error) throw std::move(*d.error);
+      })
+      .def("_collide_manager", [](ManagerCore& self, ManagerCore& other, const py::object& cdata,
+                                  const py::object& callback) {
+        CallbackData d{callback, cdata, nullptr};
+        self.manager.collide(&other.manager, &d, managerCallback);
+        if (d.error) throw std::move(*d.error);
+      });
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_kdet_fcl, m) {
+  m.doc() = "kdet_fcl: kDet's hierarchical-hash collision detection (every intersecting "
+            "triangle pair, self-collision, CPU and CUDA backends) and an FCL-style API";
+
+  // Exceptions: kdet_fcl.Error, and its subclasses that are also the built-in kinds.
+  py::object error = py::reinterpret_steal<py::object>(
+      PyErr_NewException("kdet_fcl.Error", PyExc_RuntimeError, nullptr));
+  auto sub = [&](const char* name, PyObject* builtin) {
+    py::tuple bases = py::make_tuple(error, py::handle(builtin));
+    return py::reinterpret_steal<py::object>(
+        PyErr_NewException(name, bases.ptr(), nullptr));
+  };
+  py::object invalid = sub("kdet_fcl.InvalidInputError", PyExc_ValueError);
+  py::object mesh_file = sub("kdet_fcl.MeshFileError", PyExc_OSError);
+  py::object unavailable = sub("kdet_fcl.BackendUnavailableError", PyExc_RuntimeError);
+  py::object cuda = sub("kdet_fcl.CudaError", PyExc_RuntimeError);
+  m.attr("Error") = error;
+  m.attr("InvalidInputError") = invalid;
+  m.attr("MeshFileError") = mesh_file;
+  m.attr("BackendUnavailableError") = unavailable;
+  m.attr("CudaError") = cuda;
+  // Kept alive by the module's attributes; the translator borrows them.
+  static PyObject* e_error = error.ptr();
+  static PyObject* e_invalid = invalid.ptr();
+  static PyObject* e_mesh_file = mesh_file.ptr();
+  static PyObject* e_unavailable = unavailable.ptr();
+  static PyObject* e_cuda = cuda.ptr();
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InvalidInputError& e) {
+      PyErr_SetString(e_invalid, e.what());
+    } catch (const MeshFileError& e) {
+      PyErr_SetString(e_mesh_file, e.what());
+    } catch (const BackendUnavailableError& e) {
+      PyErr_SetString(e_unavailable, e.what());
+    } catch (const CudaError& e) {
+      PyErr_SetString(e_cuda, e.what());
+    } catch (const Error& e) {
+      PyErr_SetString(e_error, e.what());
+    }
+  });
+
+  bindMesh<double>(m, "Mesh", "double");
+  bindMesh<float>(m, "MeshF32", "float");
+
+  m.def("read_mesh", [](const std::string& path) {
+    TriangleMesh<double> mesh;
+    {
+      py::gil_scoped_release nogil;
+      mesh = readMesh<double>(path);
+    }
+    return py::make_tuple(pointsArray(mesh.vertices), trianglesArray(mesh.triangles));
+  }, py::arg("path"), "(vertices (n, 3) float64, triangles (m, 3) uint32) of an OBJ, OFF, PLY or STL file.");
+  m.def("write_mesh", [](const std::string& path, const py::object& vertices,
+                         const py::object& triangles) {
+    TriangleMesh<double> mesh;
+    mesh.vertices = toPoints<double>(vertices, "write_mesh vertices");
+    mesh.triangles = toTriangles(triangles, "write_mesh triangles");
+    mesh.validate(false, "write_mesh");
+    py::gil_scoped_release nogil;
+    writeMesh(mesh, path);
+  }, py::arg("path"), py::arg("vertices"), py::arg("triangles"));
+
+  m.def("built_with_cuda", &builtWithCuda);
+  m.def("cuda_device_count", &cudaDeviceCount);
+  m.def("cuda_device_description", &cudaDeviceDescription, py::arg("device") = 0);
+
+  bindFclCore(m);
+}
