@@ -5,9 +5,10 @@
 //   ValueError, MeshFileError an OSError, BackendUnavailableError and CudaError RuntimeErrors);
 //   bad arrays (wrong shape, non-integer indices, negative indices) are InvalidInputErrors raised
 //   here, before any C++ object changes.
-// - Queries release the GIL. A mesh's wrapper holds a shared mutex: queries take it shared,
-//   changes (new vertices, pose, topology) exclusively, so Python threads may query and change
-//   meshes concurrently without a data race. A lock holder never needs the GIL.
+// - Queries on Mesh/MeshF32 release the GIL. A mesh's wrapper holds a shared mutex: queries take
+//   it shared, changes (new vertices, pose, topology) exclusively, so Python threads may query
+//   and change meshes concurrently without a data race. A lock holder never needs the GIL. The
+//   FCL-style calls keep the GIL (below).
 // - Pairs come back as (k, 2) uint32 arrays that own the query's vector (no copy).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -407,6 +408,8 @@ void bindMesh(py::module_& m, const char* name, const char* dtype) {
 }
 
 // ---- The FCL-facing core (python/kdet_fcl/fcl.py wraps it in python-fcl's API) ----
+// These calls keep the GIL, as python-fcl's do: FCL's objects and models have no lock of their
+// own, so another Python thread must not move or update them while a query reads them.
 
 using Geometry = fcl::CollisionGeometryd;
 
@@ -505,12 +508,10 @@ py::tuple collideCore(const ObjectCore& a, const ObjectCore& b, long long num_ma
   requireBuilt(a.geometry.get(), "collide");
   requireBuilt(b.geometry.get(), "collide");
   if (engine == "kdet") {
-    py::gil_scoped_release nogil;
     n = kdet_fcl::collide(a.object.get(), b.object.get(), request, result);
   } else if (engine == "fcl") {
     refitForFcl(a.geometry.get());
     refitForFcl(b.geometry.get());
-    py::gil_scoped_release nogil;
     n = fcl::collide(a.object.get(), b.object.get(), request, result);
   } else {
     throw InvalidInputError("engine must be 'kdet' or 'fcl', not '" + engine + "'");
@@ -523,10 +524,7 @@ py::tuple selfCollideCore(const ObjectCore& a, long long num_max_contacts, bool 
   fcl::CollisionResultd result;
   std::size_t n = 0;
   requireBuilt(a.geometry.get(), "self_collide");
-  {
-    py::gil_scoped_release nogil;
-    n = kdet_fcl::selfCollide(a.object.get(), request, result);
-  }
+  n = kdet_fcl::selfCollide(a.object.get(), request, result);
   return contactsOf(result, a.geometry.get(), n);
 }
 
@@ -539,11 +537,7 @@ py::tuple distanceCore(const ObjectCore& a, const ObjectCore& b, bool nearest, b
   requireBuilt(b.geometry.get(), "distance");
   refitForFcl(a.geometry.get());
   refitForFcl(b.geometry.get());
-  double d = 0;
-  {
-    py::gil_scoped_release nogil;
-    d = kdet_fcl::distance(a.object.get(), b.object.get(), request, result);
-  }
+  const double d = kdet_fcl::distance(a.object.get(), b.object.get(), request, result);
   py::array_t<double> p0(3), p1(3);
   for (int j = 0; j < 3; ++j)
     p0.mutable_at(j) = result.nearest_points[0][j], p1.mutable_at(j) = result.nearest_points[1][j];

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the whole test suite with AddressSanitizer + UndefinedBehaviorSanitizer into
-# ${ASAN_BUILD_DIR:-build-asan} (CPU only, no benchmarks, no Python module) and runs it with ctest. Any sanitizer
-# report aborts the test that triggered it (-fno-sanitize-recover=all), so it fails.
+# ${ASAN_BUILD_DIR:-build-asan} (CPU only, no benchmarks, no Python module) and runs it with
+# ctest. Any sanitizer report aborts the test that triggered it (-fno-sanitize-recover=all), so
+# it fails.
 # Extra arguments go to ctest. Ends with ctest's summary; the exit status is ctest's.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
