@@ -26,6 +26,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -89,8 +90,8 @@ std::vector<Triangle> toTriangles(const py::handle& obj, const std::string& what
   auto take = [&](std::size_t i, int c, long double v) {
     if (!(v >= 0 && v < 4294967295.0L)) {
       std::ostringstream s;
-      s << what << ": triangle " << i << " has vertex index " << static_cast<long long>(v)
-        << ", outside [0, 4294967295)";
+      s << what << ": triangle " << i << " has vertex index " << std::fixed << std::setprecision(0)
+        << v << ", outside [0, 4294967295)";
       throw InvalidInputError(s.str());
     }
     out[i][c] = static_cast<std::uint32_t>(v);

@@ -193,6 +193,8 @@ class BadInput(unittest.TestCase):
         V = self.V
         self.assertInvalid(lambda: kdet_fcl.Mesh(V, [[0, 1, 3]]), "refers to vertex 3")
         self.assertInvalid(lambda: kdet_fcl.Mesh(V, [[0, 1, -1]]), "vertex index -1")
+        self.assertInvalid(lambda: kdet_fcl.Mesh(V, np.full((1, 3), 2 ** 63, dtype=np.uint64)),
+                           "vertex index 9223372036854775808,")
         self.assertInvalid(lambda: kdet_fcl.Mesh(V, [[0, 1.0, 2]]), "must be integers")
         self.assertInvalid(lambda: kdet_fcl.Mesh(V, [0, 1, 2]), "(m, 3)")
         self.assertInvalid(lambda: kdet_fcl.Mesh(V[:, :2], [[0, 1, 2]]), "(n, 3)")
