@@ -774,13 +774,14 @@ PYBIND11_MODULE(_kdet_fcl, m) {
   m.attr("MeshFileError") = mesh_file;
   m.attr("BackendUnavailableError") = unavailable;
   m.attr("CudaError") = cuda;
-  // Kept alive by the module's attributes; the translator borrows them.
-  static PyObject* e_error = error.ptr();
-  static PyObject* e_invalid = invalid.ptr();
-  static PyObject* e_mesh_file = mesh_file.ptr();
-  static PyObject* e_unavailable = unavailable.ptr();
-  static PyObject* e_cuda = cuda.ptr();
-  py::register_exception_translator([](std::exception_ptr p) {
+  // The translator's own references, never dropped (the module's attributes may be deleted).
+  static PyObject* e_error = error.inc_ref().ptr();
+  static PyObject* e_invalid = invalid.inc_ref().ptr();
+  static PyObject* e_mesh_file = mesh_file.inc_ref().ptr();
+  static PyObject* e_unavailable = unavailable.inc_ref().ptr();
+  static PyObject* e_cuda = cuda.inc_ref().ptr();
+  // Local: only this module's calls are translated by it.
+  py::register_local_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const InvalidInputError& e) {
