@@ -53,13 +53,14 @@ std::string shapeOf(const py::array& a) {
   return s.str();
 }
 
-/// An (n, 3) array of numbers as Vec3<S> (any real or integer dtype, any layout); an empty
-/// array of any shape is no row.
-template <class S>
-std::vector<Vec3<S>> toPoints(const py::handle& obj, const std::string& what) {
+/// An (n, 3) array of numbers (any real or integer dtype, any layout) as rows make(x, y, z) of
+/// S coordinates; an empty array of any shape is no row.
+template <class S, class Make>
+auto toRows(const py::handle& obj, const std::string& what, Make make) {
+  std::vector<decltype(make(S(), S(), S()))> out;
   py::array any = py::array::ensure(obj);
   if (!any) throw InvalidInputError(what + ": expected an (n, 3) array of numbers");
-  if (any.size() == 0) return {};
+  if (any.size() == 0) return out;
   const char kind = any.dtype().kind();
   if (kind != 'f' && kind != 'i' && kind != 'u')
     throw InvalidInputError(what + ": expected numbers, got dtype " +
@@ -68,10 +69,17 @@ std::vector<Vec3<S>> toPoints(const py::handle& obj, const std::string& what) {
   if (!a) throw InvalidInputError(what + ": expected an (n, 3) array of numbers");
   if (a.ndim() != 2 || a.shape(1) != 3)
     throw InvalidInputError(what + ": expected an (n, 3) array, got shape " + shapeOf(a));
-  std::vector<Vec3<S>> out(static_cast<std::size_t>(a.shape(0)));
   const S* p = a.data();
-  for (std::size_t i = 0; i < out.size(); ++i) out[i] = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+  out.reserve(static_cast<std::size_t>(a.shape(0)));
+  for (py::ssize_t i = 0; i < a.shape(0); ++i)
+    out.push_back(make(p[3 * i], p[3 * i + 1], p[3 * i + 2]));
   return out;
+}
+
+/// An (n, 3) array of numbers as the library's points.
+template <class S>
+std::vector<Vec3<S>> toPoints(const py::handle& obj, const std::string& what) {
+  return toRows<S>(obj, what, [](S x, S y, S z) { return Vec3<S>{x, y, z}; });
 }
 
 /// An (m, 3) array of integer vertex indices in [0, 2^32 - 1); an empty array of any shape is no
@@ -155,14 +163,19 @@ Predicate toPredicate(const std::string& name) {
   throw InvalidInputError("predicate must be 'exact', 'double' or 'float', not '" + name + "'");
 }
 
+/// A `threads` argument: 0 (every hardware thread) to 4096.
+int toThreads(long long threads, const std::string& what) {
+  if (threads < 0 || threads > 4096)
+    throw InvalidInputError(what + "threads must be in [0, 4096] (0: every hardware thread)");
+  return static_cast<int>(threads);
+}
+
 QueryOptions toOptions(long long max_pairs, const std::string& backend, long long threads,
                        const std::string& predicate) {
   if (max_pairs < 0) throw InvalidInputError("max_pairs must be >= 0 (0: every pair)");
-  if (threads < 0 || threads > 4096)
-    throw InvalidInputError("threads must be in [0, 4096] (0: every hardware thread)");
   QueryOptions o;
   o.max_pairs = static_cast<std::size_t>(max_pairs);
-  o.threads = static_cast<int>(threads);
+  o.threads = toThreads(threads, "");
   o.backend = toBackend(backend);
   o.predicate = toPredicate(predicate);
   return o;
@@ -185,6 +198,22 @@ struct ReadLocks {
   }
 };
 
+/// fn() without the GIL, under shared locks of a and b (b may be null or a itself): a query.
+template <class S, class F>
+auto reading(const PyMesh<S>& a, const PyMesh<S>* b, F&& fn) {
+  py::gil_scoped_release nogil;
+  ReadLocks<S> lk(a, b);
+  return fn();
+}
+
+/// fn() without the GIL, under m's exclusive lock: a change of the mesh.
+template <class S, class F>
+void changing(PyMesh<S>& m, F&& fn) {
+  py::gil_scoped_release nogil;
+  std::unique_lock<std::shared_mutex> lk(m.mutex);
+  fn();
+}
+
 template <class S>
 py::array pointsArray(const std::vector<Vec3<S>>& v) {
   py::array_t<S> out({static_cast<py::ssize_t>(v.size()), py::ssize_t(3)});
@@ -201,7 +230,6 @@ py::array trianglesArray(const std::vector<Triangle>& t) {
   return out;
 }
 
-template <class S>
 py::dict kfreeDict(const KFreeStats& k) {
   py::dict d;
   d["triangles"] = k.triangles;
@@ -232,15 +260,14 @@ void bindMesh(py::module_& m, const char* name, const char* dtype) {
       .def(py::init([cls](const py::object& vertices, const py::object& triangles,
                           const py::object& rotation, const py::object& translation,
                           long long threads) {
-             if (threads < 0 || threads > 4096)
-               throw InvalidInputError(cls + ": threads must be in [0, 4096]");
+             const int t = toThreads(threads, cls + ": ");
              TriangleMesh<S> mesh;
              mesh.vertices = toPoints<S>(vertices, cls + " vertices");
              mesh.triangles = toTriangles(triangles, cls + " triangles");
              const Transform<S> pose = toPose<S>(rotation, translation, cls);
              auto out = std::make_unique<M>();
              py::gil_scoped_release nogil;
-             out->mesh = std::make_unique<HashedMesh<S>>(std::move(mesh), pose, int(threads));
+             out->mesh = std::make_unique<HashedMesh<S>>(std::move(mesh), pose, t);
              return out;
            }),
            py::arg("vertices"), py::arg("triangles"), py::kw_only(),
@@ -274,34 +301,23 @@ void bindMesh(py::module_& m, const char* name, const char* dtype) {
       }, "(rotation 3x3, translation (3,)): where the mesh's frame lies in the world.")
       .def("set_pose", [cls](M& self, const py::object& rotation, const py::object& translation) {
         const Transform<S> pose = toPose<S>(rotation, translation, cls + ".set_pose");
-        py::gil_scoped_release nogil;
-        std::unique_lock<std::shared_mutex> lk(self.mutex);
-        self.mesh->setPose(pose);
+        changing(self, [&] { self.mesh->setPose(pose); });
       }, py::arg("rotation") = py::none(), py::arg("translation") = py::none(),
          "A rigid motion: no re-hash. None is the identity rotation / zero translation.")
       .def("update_vertices", [cls](M& self, const py::object& vertices) {
         std::vector<Vec3<S>> v = toPoints<S>(vertices, cls + ".update_vertices");
-        py::gil_scoped_release nogil;
-        std::unique_lock<std::shared_mutex> lk(self.mutex);
-        self.mesh->updateVertices(v);
+        changing(self, [&] { self.mesh->updateVertices(v); });
       }, py::arg("vertices"),
          "New positions for the same vertices (a deformation): the next query re-hashes.")
       .def("set_mesh", [cls](M& self, const py::object& vertices, const py::object& triangles) {
         TriangleMesh<S> mesh;
         mesh.vertices = toPoints<S>(vertices, cls + ".set_mesh vertices");
         mesh.triangles = toTriangles(triangles, cls + ".set_mesh triangles");
-        py::gil_scoped_release nogil;
-        std::unique_lock<std::shared_mutex> lk(self.mutex);
-        self.mesh->setMesh(std::move(mesh));
+        changing(self, [&] { self.mesh->setMesh(std::move(mesh)); });
       }, py::arg("vertices"), py::arg("triangles"),
          "New topology (fracture, remeshing): the next query rebuilds.")
       .def("stats", [](const M& self) {
-        HierarchyStats s;
-        {
-          py::gil_scoped_release nogil;
-          std::shared_lock<std::shared_mutex> lk(self.mutex);
-          s = self.mesh->stats();
-        }
+        const HierarchyStats s = reading<S>(self, nullptr, [&] { return self.mesh->stats(); });
         py::dict d;
         d["triangles"] = s.triangles;
         d["levels"] = s.levels;
@@ -324,12 +340,7 @@ void bindMesh(py::module_& m, const char* name, const char* dtype) {
   m.def("intersect", [](const M& a, const M& b, long long max_pairs, const std::string& backend,
                         long long threads, const std::string& predicate) {
     const QueryOptions o = toOptions(max_pairs, backend, threads, predicate);
-    QueryResult r;
-    {
-      py::gil_scoped_release nogil;
-      ReadLocks<S> lk(a, &b);
-      r = intersectMeshes(*a.mesh, *b.mesh, o);
-    }
+    QueryResult r = reading(a, &b, [&] { return intersectMeshes(*a.mesh, *b.mesh, o); });
     return pairsArray(std::move(r.pairs));
   }, py::arg("a"), py::arg("b"), py::kw_only(), py::arg("max_pairs") = 0,
      py::arg("backend") = "cpu", py::arg("threads") = 0, py::arg("predicate") = "exact");
@@ -337,12 +348,7 @@ void bindMesh(py::module_& m, const char* name, const char* dtype) {
   m.def("intersect_self", [](const M& a, long long max_pairs, const std::string& backend,
                              long long threads, const std::string& predicate) {
     const QueryOptions o = toOptions(max_pairs, backend, threads, predicate);
-    QueryResult r;
-    {
-      py::gil_scoped_release nogil;
-      ReadLocks<S> lk(a, nullptr);
-      r = intersectSelf(*a.mesh, o);
-    }
+    QueryResult r = reading<S>(a, nullptr, [&] { return intersectSelf(*a.mesh, o); });
     return pairsArray(std::move(r.pairs));
   }, py::arg("mesh"), py::kw_only(), py::arg("max_pairs") = 0, py::arg("backend") = "cpu",
      py::arg("threads") = 0, py::arg("predicate") = "exact");
@@ -350,12 +356,7 @@ void bindMesh(py::module_& m, const char* name, const char* dtype) {
   m.def("intersect_all", [](const M& a, const M& b, const std::string& backend, long long threads,
                             const std::string& predicate) {
     const QueryOptions o = toOptions(0, backend, threads, predicate);
-    AllPairsResult r;
-    {
-      py::gil_scoped_release nogil;
-      ReadLocks<S> lk(a, &b);
-      r = intersectAll(*a.mesh, *b.mesh, o);
-    }
+    AllPairsResult r = reading(a, &b, [&] { return intersectAll(*a.mesh, *b.mesh, o); });
     return py::make_tuple(pairsArray(std::move(r.self_a.pairs)),
                           pairsArray(std::move(r.self_b.pairs)),
                           pairsArray(std::move(r.inter.pairs)));
@@ -364,47 +365,29 @@ void bindMesh(py::module_& m, const char* name, const char* dtype) {
 
   m.def("intersects", [](const M& a, const M& b, const std::string& backend, long long threads) {
     const QueryOptions o = toOptions(1, backend, threads, "exact");
-    py::gil_scoped_release nogil;
-    ReadLocks<S> lk(a, &b);
-    return meshesIntersect(*a.mesh, *b.mesh, o);
+    return reading(a, &b, [&] { return meshesIntersect(*a.mesh, *b.mesh, o); });
   }, py::arg("a"), py::arg("b"), py::kw_only(), py::arg("backend") = "cpu",
      py::arg("threads") = 0);
 
   m.def("brute_force_intersect", [](const M& a, const M& b, const std::string& predicate) {
     const Predicate p = toPredicate(predicate);
-    std::vector<TrianglePair> r;
-    {
-      py::gil_scoped_release nogil;
-      ReadLocks<S> lk(a, &b);
-      r = bruteForceIntersectMeshes(a.mesh->mesh(), a.mesh->pose(), b.mesh->mesh(),
-                                    b.mesh->pose(), p);
-    }
-    return pairsArray(std::move(r));
+    return pairsArray(reading(a, &b, [&] {
+      return bruteForceIntersectMeshes(a.mesh->mesh(), a.mesh->pose(), b.mesh->mesh(),
+                                       b.mesh->pose(), p);
+    }));
   }, py::arg("a"), py::arg("b"), py::kw_only(), py::arg("predicate") = "exact");
 
   m.def("brute_force_intersect_self", [](const M& a, const std::string& predicate) {
     const Predicate p = toPredicate(predicate);
-    std::vector<TrianglePair> r;
-    {
-      py::gil_scoped_release nogil;
-      ReadLocks<S> lk(a, nullptr);
-      r = bruteForceIntersectSelf(a.mesh->mesh(), p);
-    }
-    return pairsArray(std::move(r));
+    return pairsArray(
+        reading<S>(a, nullptr, [&] { return bruteForceIntersectSelf(a.mesh->mesh(), p); }));
   }, py::arg("mesh"), py::kw_only(), py::arg("predicate") = "exact");
 
   m.def("analyze_kfree", [](const M& a, bool keep_counts, long long threads) {
-    if (threads < 0 || threads > 4096) throw InvalidInputError("threads must be in [0, 4096]");
     KFreeOptions o;
     o.keep_counts = keep_counts;
-    o.threads = int(threads);
-    KFreeStats k;
-    {
-      py::gil_scoped_release nogil;
-      ReadLocks<S> lk(a, nullptr);
-      k = analyzeKFree(a.mesh->mesh(), o);
-    }
-    return kfreeDict<S>(k);
+    o.threads = toThreads(threads, "analyze_kfree: ");
+    return kfreeDict(reading<S>(a, nullptr, [&] { return analyzeKFree(a.mesh->mesh(), o); }));
   }, py::arg("mesh"), py::kw_only(), py::arg("keep_counts") = false, py::arg("threads") = 0);
 }
 
@@ -439,10 +422,7 @@ fcl::Vector3d toVec3(const py::handle& p, const std::string& what) {
 }
 
 std::vector<fcl::Vector3d> toFclPoints(const py::handle& p, const std::string& what) {
-  std::vector<Vec3<double>> v = toPoints<double>(p, what);
-  std::vector<fcl::Vector3d> out(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) out[i] = {v[i].x, v[i].y, v[i].z};
-  return out;
+  return toRows<double>(p, what, [](double x, double y, double z) { return fcl::Vector3d(x, y, z); });
 }
 
 fcl::Transform3d toFclTransform(const py::handle& rotation, const py::handle& translation) {
@@ -817,6 +797,22 @@ PYBIND11_MODULE(_kdet_fcl, m) {
     py::gil_scoped_release nogil;
     writeMesh(mesh, path);
   }, py::arg("path"), py::arg("vertices"), py::arg("triangles"));
+
+  // The library's procedural scenes (kdet_fcl/scenes.h), as (vertices, triangles).
+  m.def("make_sphere", [](double radius, int segments, int rings, const py::object& center) {
+    const Vec3<double> c = toPose<double>(py::none(), center, "make_sphere center").t;
+    const TriangleMesh<double> mesh = makeSphere<double>(c, radius, segments, rings);
+    return py::make_tuple(pointsArray(mesh.vertices), trianglesArray(mesh.triangles));
+  }, py::arg("radius"), py::arg("segments"), py::arg("rings"), py::kw_only(),
+     py::arg("center") = py::none(),
+     "A UV sphere: `segments` around, `rings` from pole to pole (one vertex at each pole).");
+  m.def("make_draped_cloth", [](int n, double size, double sphere_radius, double penetration,
+                                double time) {
+    const TriangleMesh<double> mesh =
+        makeDrapedCloth<double>(n, size, sphere_radius, penetration, time);
+    return py::make_tuple(pointsArray(mesh.vertices), trianglesArray(mesh.triangles));
+  }, py::arg("n"), py::arg("size"), py::arg("sphere_radius"), py::arg("penetration"),
+     py::arg("time"), "An n x n cloth draped over a sphere at the origin (time 0 to 1).");
 
   m.def("built_with_cuda", &builtWithCuda);
   m.def("cuda_device_count", &cudaDeviceCount);

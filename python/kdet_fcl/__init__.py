@@ -37,6 +37,8 @@ from ._kdet_fcl import (  # noqa: F401
     intersect_all,
     intersect_self,
     intersects,
+    make_draped_cloth,
+    make_sphere,
     read_mesh,
     write_mesh,
 )
@@ -44,7 +46,7 @@ from ._kdet_fcl import (  # noqa: F401
 __all__ = [
     "Mesh", "MeshF32", "intersect", "intersect_self", "intersect_all", "intersects",
     "brute_force_intersect", "brute_force_intersect_self", "analyze_kfree", "read_mesh",
-    "write_mesh", "built_with_cuda", "cuda_device_count", "cuda_device_description",
+    "write_mesh", "make_sphere", "make_draped_cloth", "built_with_cuda", "cuda_device_count", "cuda_device_description",
     "cuda_available", "Error", "InvalidInputError", "MeshFileError",
     "BackendUnavailableError", "CudaError",
 ]

@@ -4,27 +4,10 @@ import numpy as np
 
 
 def sphere(radius=1.0, nu=24, nv=12, center=(0.0, 0.0, 0.0)):
-    """A UV sphere: nu segments around, nv rings from pole to pole (welded, closed)."""
-    verts = [[0.0, 0.0, radius]]
-    for i in range(1, nv):
-        th = np.pi * i / nv
-        for j in range(nu):
-            ph = 2 * np.pi * j / nu
-            verts.append([radius * np.sin(th) * np.cos(ph), radius * np.sin(th) * np.sin(ph),
-                          radius * np.cos(th)])
-    verts.append([0.0, 0.0, -radius])
-    tris = []
-    ring = lambda i, j: 1 + (i - 1) * nu + (j % nu)  # noqa: E731
-    south = len(verts) - 1
-    for j in range(nu):
-        tris.append([0, ring(1, j), ring(1, j + 1)])
-        tris.append([south, ring(nv - 1, j + 1), ring(nv - 1, j)])
-    for i in range(1, nv - 1):
-        for j in range(nu):
-            a, b, c, d = ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1)
-            tris.append([a, c, b])
-            tris.append([b, c, d])
-    return np.asarray(verts) + np.asarray(center, float), np.asarray(tris, dtype=np.int64)
+    """A UV sphere: nu segments around, nv rings from pole to pole (the library's makeSphere)."""
+    import kdet_fcl
+    v, t = kdet_fcl.make_sphere(radius, nu, nv, center=center)
+    return v, t.astype(np.int64)
 
 
 def torus(R=1.0, r=0.3, nu=32, nv=12):
