@@ -448,8 +448,8 @@ void requireBuilt(const Geometry* g, const std::string& what) {
   if (auto* m = dynamic_cast<const Meshd*>(g))
     if (m->build_state != fcl::BVH_BUILD_STATE_PROCESSED &&
         m->build_state != fcl::BVH_BUILD_STATE_UPDATED)
-      throw InvalidInputError(what + ": a BVHModel is not built (call endModel, or "
-                              "endUpdateModel after beginUpdateModel)");
+      throw InvalidInputError(what + ": a BVHModel is not built (endModel not called, or refused "
+                              "by FCL: a model with no triangles; or an update not ended)");
 }
 
 /// Meshes held in MeshMode::KdetOnly refit FCL's BVH before FCL's own query reads it.
@@ -629,28 +629,54 @@ void bindFclCore(py::module_& m) {
       .def_property_readonly("num_vertices", [](const Meshd& self) { return self.num_vertices; })
       .def("buildState", [](const Meshd& self) { return int(self.build_state); });
 
+  // The shapes' sizes must be finite and positive: FCL answers a NaN-sized shape with no
+  // contact and no error.
+  auto sized = [](const char* shape, std::initializer_list<double> sizes) {
+    for (double v : sizes)
+      if (!(std::isfinite(v) && v > 0))
+        throw InvalidInputError(std::string(shape) + ": sizes must be finite and positive, got " +
+                                std::to_string(v));
+  };
   py::class_<fcl::Boxd, Geometry, std::shared_ptr<fcl::Boxd>>(m, "Box")
-      .def(py::init<double, double, double>(), py::arg("x"), py::arg("y"), py::arg("z"))
+      .def(py::init([sized](double x, double y, double z) {
+             sized("Box", {x, y, z});
+             return std::make_shared<fcl::Boxd>(x, y, z);
+           }), py::arg("x"), py::arg("y"), py::arg("z"))
       .def_property_readonly("side", [](const fcl::Boxd& b) {
         py::array_t<double> s(3);
         for (int j = 0; j < 3; ++j) s.mutable_at(j) = b.side[j];
         return s;
       });
   py::class_<fcl::Sphered, Geometry, std::shared_ptr<fcl::Sphered>>(m, "Sphere")
-      .def(py::init<double>(), py::arg("radius"))
+      .def(py::init([sized](double r) {
+             sized("Sphere", {r});
+             return std::make_shared<fcl::Sphered>(r);
+           }), py::arg("radius"))
       .def_readonly("radius", &fcl::Sphered::radius);
   py::class_<fcl::Ellipsoidd, Geometry, std::shared_ptr<fcl::Ellipsoidd>>(m, "Ellipsoid")
-      .def(py::init<double, double, double>(), py::arg("a"), py::arg("b"), py::arg("c"));
+      .def(py::init([sized](double a, double b, double c) {
+             sized("Ellipsoid", {a, b, c});
+             return std::make_shared<fcl::Ellipsoidd>(a, b, c);
+           }), py::arg("a"), py::arg("b"), py::arg("c"));
   py::class_<fcl::Capsuled, Geometry, std::shared_ptr<fcl::Capsuled>>(m, "Capsule")
-      .def(py::init<double, double>(), py::arg("radius"), py::arg("lz"))
+      .def(py::init([sized](double r, double lz) {
+             sized("Capsule", {r, lz});
+             return std::make_shared<fcl::Capsuled>(r, lz);
+           }), py::arg("radius"), py::arg("lz"))
       .def_readonly("radius", &fcl::Capsuled::radius)
       .def_readonly("lz", &fcl::Capsuled::lz);
   py::class_<fcl::Cylinderd, Geometry, std::shared_ptr<fcl::Cylinderd>>(m, "Cylinder")
-      .def(py::init<double, double>(), py::arg("radius"), py::arg("lz"))
+      .def(py::init([sized](double r, double lz) {
+             sized("Cylinder", {r, lz});
+             return std::make_shared<fcl::Cylinderd>(r, lz);
+           }), py::arg("radius"), py::arg("lz"))
       .def_readonly("radius", &fcl::Cylinderd::radius)
       .def_readonly("lz", &fcl::Cylinderd::lz);
   py::class_<fcl::Coned, Geometry, std::shared_ptr<fcl::Coned>>(m, "Cone")
-      .def(py::init<double, double>(), py::arg("radius"), py::arg("lz"))
+      .def(py::init([sized](double r, double lz) {
+             sized("Cone", {r, lz});
+             return std::make_shared<fcl::Coned>(r, lz);
+           }), py::arg("radius"), py::arg("lz"))
       .def_readonly("radius", &fcl::Coned::radius)
       .def_readonly("lz", &fcl::Coned::lz);
 

@@ -443,6 +443,24 @@ class FclApi(unittest.TestCase):
         with self.assertRaises(ValueError):
             fcl.CollisionObject(None)
         self.assertLess(fcl.BVHModel().endModel(), 0)  # FCL's own sequence check: a code
+        # Shapes of non-finite or non-positive size (FCL answers a NaN sphere with no contact).
+        for make in (lambda: fcl.Sphere(np.nan), lambda: fcl.Box(1, np.inf, 1),
+                     lambda: fcl.Capsule(0.1, -1), lambda: fcl.Cylinder(0, 1),
+                     lambda: fcl.Cone(np.nan, 1), lambda: fcl.Ellipsoid(1, 1, -np.inf)):
+            with self.assertRaises(kdet_fcl.InvalidInputError) as cm:
+                make()
+            self.assertIn("finite and positive", str(cm.exception))
+        # The scene makers refuse bad sizes too.
+        with self.assertRaises(kdet_fcl.InvalidInputError):
+            kdet_fcl.make_sphere(-1.0, 12, 6)
+        with self.assertRaises(kdet_fcl.InvalidInputError):
+            kdet_fcl.make_sphere(1.0, 2, 6)
+        with self.assertRaises(kdet_fcl.InvalidInputError):
+            kdet_fcl.make_sphere(1.0, 12, 6, center=[0, 0])
+        with self.assertRaises(kdet_fcl.InvalidInputError):
+            kdet_fcl.make_draped_cloth(0, 4.0, 1.0, 0.03, 1.0)
+        v, t = kdet_fcl.make_draped_cloth(10, 4.0, 1.0, 0.03, 1.0)
+        self.assertEqual((len(t), v.shape[1]), (200, 3))
 
     def test_managers(self):
         objs = []
@@ -526,6 +544,10 @@ class SharedData(unittest.TestCase):
             a = kdet_fcl.Mesh(ve, te)
             b = kdet_fcl.Mesh(vr, tr, rotation=R, translation=t)
             self.assertEqual(got, M.pair_set(kdet_fcl.intersect(a, b)))
+            self.assertEqual(got, M.pair_set(kdet_fcl.brute_force_intersect(a, b)))
+            ref = fcl.CollisionResult()
+            fcl.fcl_collide(o1, o2, fcl.CollisionRequest(num_max_contacts=ALL), ref)
+            self.assertEqual(got, {(c.b1, c.b2) for c in ref.contacts}, "FCL 0.7 agrees here")
             hits += bool(got)
         self.assertGreater(hits, 0)
 
