@@ -14,15 +14,26 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <fcl/config.h>
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/cone.h>
+#include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/ellipsoid.h>
+#include <fcl/geometry/shape/halfspace.h>
+#include <fcl/geometry/shape/plane.h>
 #include <fcl/geometry/shape/sphere.h>
+#include <fcl/geometry/shape/triangle_p.h>
 #include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/collision-inl.h>
+#include <fcl/narrowphase/distance-inl.h>
 #include <fcl/narrowphase/distance.h>
+#if FCL_HAVE_OCTOMAP
+#include <fcl/geometry/octree/octree.h>
+#include <octomap/OcTree.h>
+#endif
 
 #include <cmath>
 #include <cstdint>
@@ -425,8 +436,12 @@ std::vector<fcl::Vector3d> toFclPoints(const py::handle& p, const std::string& w
   return toRows<double>(p, what, [](double x, double y, double z) { return fcl::Vector3d(x, y, z); });
 }
 
-fcl::Transform3d toFclTransform(const py::handle& rotation, const py::handle& translation) {
-  const Transform<double> T = toPose<double>(rotation, translation, "CollisionObject");
+/// A rigid pose (finite; the rotation orthonormal with determinant +1, as a mesh's pose): FCL
+/// answers non-finite or scaling poses without an error.
+fcl::Transform3d toFclTransform(const py::handle& rotation, const py::handle& translation,
+                                const std::string& what = "CollisionObject") {
+  const Transform<double> T = toPose<double>(rotation, translation, what);
+  validatePose(T, what);
   fcl::Transform3d tf = fcl::Transform3d::Identity();
   fcl::Matrix3d R;
   for (int i = 0; i < 3; ++i)
@@ -435,6 +450,122 @@ fcl::Transform3d toFclTransform(const py::handle& rotation, const py::handle& tr
   tf.translation() = fcl::Vector3d(T.t.x, T.t.y, T.t.z);
   return tf;
 }
+
+/// Three finite numbers as a point.
+fcl::Vector3d finiteVec3(const py::handle& p, const std::string& what) {
+  const fcl::Vector3d v = toVec3(p, what);
+  if (!v.allFinite()) throw InvalidInputError(what + ": the coordinates must be finite");
+  return v;
+}
+
+/// A plane's or halfspace's (n, d): n finite and not zero, d finite.
+std::pair<fcl::Vector3d, double> planeOf(const py::handle& n, double d, const std::string& what) {
+  const fcl::Vector3d v = finiteVec3(n, what + " n");
+  if (v.norm() == 0 || !std::isfinite(v.norm()))
+    throw InvalidInputError(what + ": the normal n must not be zero");
+  if (!std::isfinite(d)) throw InvalidInputError(what + ": d must be finite");
+  return {v, d};
+}
+
+/// python-fcl's Convex(vertices, num_faces, faces), checked: FCL reads the face list unchecked
+/// (an index outside the vertices, or a list shorter than its counts say, reads past the arrays).
+std::shared_ptr<fcl::Convexd> makeConvex(const py::object& vertices, long long num_faces,
+                                         const py::object& faces) {
+  auto points = std::make_shared<std::vector<fcl::Vector3d>>(toFclPoints(vertices, "Convex vertices"));
+  if (points->empty()) throw InvalidInputError("Convex: no vertices");
+  for (const fcl::Vector3d& p : *points)
+    if (!p.allFinite()) throw InvalidInputError("Convex vertices: the coordinates must be finite");
+  if (num_faces < 1 || num_faces > std::numeric_limits<int>::max())
+    throw InvalidInputError("Convex: num_faces must be in [1, 2^31)");
+  py::array any = py::array::ensure(faces);
+  if (!any || (any.size() > 0 && any.dtype().kind() != 'i' && any.dtype().kind() != 'u'))
+    throw InvalidInputError("Convex faces: expected a flat array of integers");
+  if (any.ndim() != 1)
+    throw InvalidInputError("Convex faces: expected a flat array (count, indices..., count, ...), "
+                            "got shape " + shapeOf(any));
+  auto a = py::array_t<long long, py::array::c_style | py::array::forcecast>::ensure(any);
+  auto list = std::make_shared<std::vector<int>>();
+  list->reserve(static_cast<std::size_t>(a.size()));
+  const std::size_t size = static_cast<std::size_t>(a.size());
+  std::size_t at = 0;
+  for (long long f = 0; f < num_faces; ++f) {
+    if (at >= size)
+      throw InvalidInputError("Convex faces: the list ends after " + std::to_string(f) +
+                              " faces, num_faces is " + std::to_string(num_faces));
+    const long long count = a.data()[at];
+    if (count < 3 || static_cast<unsigned long long>(count) > size - at - 1)
+      throw InvalidInputError("Convex faces: face " + std::to_string(f) + " has vertex count " +
+                              std::to_string(count) + " (at least 3, and no more than the " +
+                              std::to_string(size - at - 1) + " entries left)");
+    list->push_back(static_cast<int>(count));
+    for (long long k = 1; k <= count; ++k) {
+      const long long v = a.data()[at + static_cast<std::size_t>(k)];
+      if (v < 0 || static_cast<unsigned long long>(v) >= points->size())
+        throw InvalidInputError("Convex faces: face " + std::to_string(f) + " has vertex index " +
+                                std::to_string(v) + ", but " + std::to_string(points->size()) +
+                                " vertices were given");
+      list->push_back(static_cast<int>(v));
+    }
+    at += static_cast<std::size_t>(count) + 1;
+  }
+  return std::make_shared<fcl::Convexd>(points, static_cast<int>(num_faces), list);
+}
+
+#if FCL_HAVE_OCTOMAP
+/// octomap's binary node data, checked before octomap reads it: each node is two bytes that
+/// mark its 8 children (2 bits each: 00 unknown, 10 free leaf, 01 occupied leaf, 11 inner
+/// node, whose own node follows, depth first). octomap's reader recurses into every inner child
+/// and reads past a short buffer: a tree deeper than octomap's 16 levels or data that ends
+/// early (or goes on after the tree) is refused here.
+void checkOcTreeData(const std::string& data) {
+  static const char header[] = "# Octomap OcTree";
+  if (data.compare(0, sizeof(header) - 1, header) == 0)
+    throw InvalidInputError("OcTree: data starts with an octomap file header; pass the node data "
+                            "after the header's 'data' line (OcTree::writeBinaryData's output)");
+  std::vector<std::pair<int, int>> open;  // (depth of the nodes to read, how many are left)
+  std::size_t at = 0;
+  auto readNode = [&](int depth) {
+    if (at + 2 > data.size())
+      throw InvalidInputError("OcTree: the data ends inside the tree (" +
+                              std::to_string(data.size()) + " bytes)");
+    int inner = 0;
+    for (int b = 0; b < 2; ++b) {
+      const auto bits = static_cast<unsigned char>(data[at + static_cast<std::size_t>(b)]);
+      for (int i = 0; i < 4; ++i) inner += ((bits >> (2 * i)) & 3u) == 3u;
+    }
+    at += 2;
+    if (inner > 0) {
+      if (depth + 2 > 16)
+        throw InvalidInputError("OcTree: the data's tree is deeper than octomap's 16 levels");
+      open.emplace_back(depth + 1, inner);
+    }
+  };
+  readNode(0);
+  while (!open.empty()) {
+    if (open.back().second == 0) {
+      open.pop_back();
+      continue;
+    }
+    --open.back().second;
+    readNode(open.back().first);
+  }
+  if (at != data.size())
+    throw InvalidInputError("OcTree: " + std::to_string(data.size() - at) +
+                            " bytes follow the tree's data");
+}
+
+std::shared_ptr<fcl::OcTreed> makeOcTree(double r, const py::bytes& data) {
+  if (!(std::isfinite(r) && r > 0))
+    throw InvalidInputError("OcTree: the resolution r must be finite and positive");
+  const std::string bytes = data;
+  checkOcTreeData(bytes);
+  auto tree = std::make_shared<octomap::OcTree>(r);
+  std::istringstream in(bytes);
+  tree->readBinaryData(in);
+  if (!in) throw InvalidInputError("OcTree: octomap could not read the data");
+  return std::make_shared<fcl::OcTreed>(tree);
+}
+#endif
 
 /// An fcl::CollisionObjectd over a geometry the Python object keeps alive (the holder).
 struct ObjectCore {
@@ -458,6 +589,22 @@ void refitForFcl(const Geometry* g) {
     if (m->mode() == MeshMode::KdetOnly) const_cast<Meshd*>(m)->refitFcl();
 }
 
+/// The cost sources of a result (octree pairs with enable_cost), as arrays; None for none.
+py::object costsOf(fcl::CollisionResultd& result) {
+  if (result.numCostSources() == 0) return py::none();
+  std::vector<fcl::CostSourced> cs;
+  result.getCostSources(cs);
+  const auto k = static_cast<py::ssize_t>(cs.size());
+  py::array_t<double> lo({k, py::ssize_t(3)}), hi({k, py::ssize_t(3)}), density(k), total(k);
+  for (py::ssize_t i = 0; i < k; ++i) {
+    const fcl::CostSourced& c = cs[static_cast<std::size_t>(i)];
+    for (int j = 0; j < 3; ++j) lo.mutable_at(i, j) = c.aabb_min[j], hi.mutable_at(i, j) = c.aabb_max[j];
+    density.mutable_at(i) = c.cost_density;
+    total.mutable_at(i) = c.total_cost;
+  }
+  return py::make_tuple(lo, hi, density, total);
+}
+
 py::tuple contactsOf(fcl::CollisionResultd& result, const Geometry* first, std::size_t n) {
   std::vector<fcl::Contactd> cs;
   result.getContacts(cs);
@@ -472,58 +619,379 @@ py::tuple contactsOf(fcl::CollisionResultd& result, const Geometry* first, std::
     depth.mutable_at(i) = c.penetration_depth;
     swapped.mutable_at(i) = c.o1 != first;
   }
-  return py::make_tuple(n, result.isCollision(), ids, normal, pos, depth, swapped);
+  return py::make_tuple(n, result.isCollision(), ids, normal, pos, depth, swapped,
+                        costsOf(result));
 }
 
-fcl::CollisionRequestd toRequest(long long num_max_contacts, bool enable_contact) {
-  if (num_max_contacts < 0) throw InvalidInputError("num_max_contacts must be >= 0");
-  return fcl::CollisionRequestd(static_cast<std::size_t>(num_max_contacts), enable_contact);
-}
-
-/// The core of fcl.py's collide: kdet_fcl::collide ("kdet") or FCL 0.7's fcl::collide ("fcl").
-py::tuple collideCore(const ObjectCore& a, const ObjectCore& b, long long num_max_contacts,
-                      bool enable_contact, const std::string& engine) {
-  const fcl::CollisionRequestd request = toRequest(num_max_contacts, enable_contact);
-  fcl::CollisionResultd result;
-  std::size_t n = 0;
-  requireBuilt(a.geometry.get(), "collide");
-  requireBuilt(b.geometry.get(), "collide");
-  if (engine == "kdet") {
-    n = kdet_fcl::collide(a.object.get(), b.object.get(), request, result);
-  } else if (engine == "fcl") {
-    refitForFcl(a.geometry.get());
-    refitForFcl(b.geometry.get());
-    n = fcl::collide(a.object.get(), b.object.get(), request, result);
-  } else {
-    throw InvalidInputError("engine must be 'kdet' or 'fcl', not '" + engine + "'");
+/// A Python value as T (bool, an integer or a number); another type is an InvalidInputError that
+/// names it.
+template <class T>
+T attrValue(const py::handle& v, const std::string& name) {
+  try {
+    return py::cast<T>(v);
+  } catch (const py::cast_error&) {
+    throw InvalidInputError(name + ": expected " +
+                            (std::is_same<T, bool>::value ? "a bool"
+                             : std::is_floating_point<T>::value ? "a number" : "an integer") +
+                            ", got " + std::string(py::repr(v)));
   }
-  return contactsOf(result, a.geometry.get(), n);
 }
 
-py::tuple selfCollideCore(const ObjectCore& a, long long num_max_contacts, bool enable_contact) {
-  const fcl::CollisionRequestd request = toRequest(num_max_contacts, enable_contact);
+/// An attribute of a python-fcl request object, as T; a missing attribute or one of another type
+/// is an InvalidInputError that names it.
+template <class T>
+T attrOf(const py::handle& o, const char* name, const char* what) {
+  PyObject* v = PyObject_GetAttrString(o.ptr(), name);
+  if (!v) {
+    PyErr_Clear();
+    throw InvalidInputError(std::string(what) + " has no attribute '" + name + "'");
+  }
+  return attrValue<T>(py::reinterpret_steal<py::object>(v), std::string(what) + "." + name);
+}
+
+/// A count attribute: an integer in [0, 2^63).
+std::size_t countOf(const py::handle& o, const char* name, const char* what) {
+  const long long n = attrOf<long long>(o, name, what);
+  if (n < 0) throw InvalidInputError(std::string(what) + "." + name + " must be >= 0");
+  return static_cast<std::size_t>(n);
+}
+
+/// An enum attribute: an integer in [0, count).
+template <class E>
+E enumOf(const py::handle& o, const char* name, const char* what, int count) {
+  const long long v = attrOf<long long>(o, name, what);
+  if (v < 0 || v >= count)
+    throw InvalidInputError(std::string(what) + "." + name + " must be in [0, " +
+                            std::to_string(count) + "), got " + std::to_string(v));
+  return static_cast<E>(v);
+}
+
+/// python-fcl's CollisionRequest as FCL's (all six fields, as python-fcl passes them).
+fcl::CollisionRequestd toRequest(const py::handle& r) {
+  const char* what = "CollisionRequest";
+  const std::size_t contacts = countOf(r, "num_max_contacts", what);
+  if (contacts == 0)  // FCL prints a warning and answers "no collision"
+    throw InvalidInputError("CollisionRequest.num_max_contacts must be at least 1");
+  return fcl::CollisionRequestd(
+      contacts, attrOf<bool>(r, "enable_contact", what),
+      countOf(r, "num_max_cost_sources", what), attrOf<bool>(r, "enable_cost", what),
+      attrOf<bool>(r, "use_approximate_cost", what),
+      enumOf<fcl::GJKSolverType>(r, "gjk_solver_type", what, 2));
+}
+
+// ---- What FCL 0.7 cannot answer, refused before FCL sees it ----
+// Found by running collide, distance and signed distance on every ordered pair of python-fcl's
+// geometry types (overlapping, apart, coincident, exactly touching; both GJK solvers) and
+// continuous collision (benchmarks/results/python-compat/; python/tests/fcl_pair_sweep.py reruns
+// it). python-fcl forwards all of these and crashes, hangs or answers wrongly; here they raise
+// UnsupportedQueryError, or go to the solver or the path that answers them.
+
+/// A query FCL 0.7 has no answer for (kdet_fcl.UnsupportedQueryError, a NotImplementedError).
+struct UnsupportedQuery : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::string nodeName(fcl::NODE_TYPE t) {
+  switch (t) {
+    case fcl::GEOM_BOX: return "Box";
+    case fcl::GEOM_SPHERE: return "Sphere";
+    case fcl::GEOM_ELLIPSOID: return "Ellipsoid";
+    case fcl::GEOM_CAPSULE: return "Capsule";
+    case fcl::GEOM_CONE: return "Cone";
+    case fcl::GEOM_CYLINDER: return "Cylinder";
+    case fcl::GEOM_CONVEX: return "Convex";
+    case fcl::GEOM_PLANE: return "Plane";
+    case fcl::GEOM_HALFSPACE: return "Halfspace";
+    case fcl::GEOM_TRIANGLE: return "TriangleP";
+    case fcl::GEOM_OCTREE: return "OcTree";
+    default: return t >= fcl::BV_AABB && t <= fcl::BV_KDOP24 ? "BVHModel" : "geometry";
+  }
+}
+
+bool unbounded(fcl::NODE_TYPE t) { return t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_PLANE; }
+
+std::string pairName(const Geometry* a, const Geometry* b) {
+  return nodeName(a->getNodeType()) + " and " + nodeName(b->getNodeType());
+}
+
+/// Whether FCL's table of the solver's functions has one for the pair (looked up as FCL does).
+template <class Table>
+bool inTable(const Table& table, const Geometry* a, const Geometry* b) {
+  const fcl::NODE_TYPE na = a->getNodeType(), nb = b->getNodeType();
+  if (a->getObjectType() == fcl::OT_GEOM && b->getObjectType() == fcl::OT_BVH) return table[nb][na];
+  return table[na][nb];
+}
+
+/// The solver a collide of a and b runs with, or UnsupportedQuery.
+fcl::GJKSolverType collideSolver(const Geometry* a, const Geometry* b, fcl::GJKSolverType gjk) {
+  const bool listed =
+      gjk == fcl::GST_LIBCCD
+          ? inTable(fcl::getCollisionFunctionLookTable<fcl::detail::GJKSolver_libccd<double>>()
+                        .collision_matrix, a, b)
+          : inTable(fcl::getCollisionFunctionLookTable<fcl::detail::GJKSolver_indep<double>>()
+                        .collision_matrix, a, b);
+  if (!listed)  // FCL prints a warning and answers "no collision"
+    throw UnsupportedQuery("FCL 0.7 has no collision test for " + pairName(a, b) +
+                           (a->getNodeType() == fcl::GEOM_TRIANGLE ||
+                                    b->getNodeType() == fcl::GEOM_TRIANGLE
+                                ? " (a TriangleP collides with nothing: use a one-triangle BVHModel)"
+                                : ""));
+  if (unbounded(a->getNodeType()) && unbounded(b->getNodeType()))
+    throw UnsupportedQuery("collide: FCL 0.7 answers " + pairName(a, b) +
+                           " wrongly (overlapping ones are reported apart when contacts are asked "
+                           "for)");
+  const fcl::NODE_TYPE na = a->getNodeType(), nb = b->getNodeType();
+  if ((na == fcl::GEOM_CONVEX && nb == fcl::GEOM_PLANE) ||
+      (na == fcl::GEOM_PLANE && nb == fcl::GEOM_CONVEX))
+    return fcl::GST_INDEP;  // libccd's Convex-Plane test crashes
+  return gjk;
+}
+
+/// Checks that FCL 0.7 has a distance for a and b that neither crashes nor answers wrongly.
+void checkDistance(const Geometry* a, const Geometry* b) {
+  // Either solver's table: they list the same pairs.
+  if (!inTable(fcl::getDistanceFunctionLookTable<fcl::detail::GJKSolver_indep<double>>()
+                   .distance_matrix, a, b))  // FCL prints a warning and answers DBL_MAX
+    throw UnsupportedQuery("FCL 0.7 has no distance for " + pairName(a, b));
+  if (unbounded(a->getNodeType()) || unbounded(b->getNodeType()))
+    throw UnsupportedQuery("distance: FCL 0.7 crashes on " + pairName(a, b) +
+                           " with GST_LIBCCD and answers wrongly with GST_INDEP");
+}
+
+/// FCL 0.7's answer, with its exceptions (such as "Error with configuration" from its signed
+/// distance of coincident cylinders) as UnsupportedQuery.
+template <class F>
+auto fromFcl(F f, const Geometry* a, const Geometry* b) {
+  try {
+    return f();
+  } catch (const kdet_fcl::Error&) {
+    throw;
+  } catch (const UnsupportedQuery&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw;  // MemoryError
+  } catch (const py::error_already_set&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw UnsupportedQuery("FCL 0.7 failed on " + pairName(a, b) + ": " + e.what());
+  }
+}
+
+/// One discrete collision of two geometries at poses: kdet_fcl::collide ("kdet": kDet decides mesh
+/// pairs) or FCL 0.7's fcl::collide ("fcl"), with the solver collideSolver picks.
+std::size_t collideAt(const Geometry* a, const fcl::Transform3d& ta, const Geometry* b,
+                      const fcl::Transform3d& tb, fcl::CollisionRequestd request,
+                      fcl::CollisionResultd& result, const std::string& engine) {
+  requireBuilt(a, "collide");
+  requireBuilt(b, "collide");
+  request.gjk_solver_type = collideSolver(a, b, request.gjk_solver_type);
+  if (engine == "kdet")
+    return fromFcl([&] { return kdet_fcl::collide(a, ta, b, tb, request, result); }, a, b);
+  if (engine != "fcl") throw InvalidInputError("engine must be 'kdet' or 'fcl', not '" + engine + "'");
+  refitForFcl(a);
+  refitForFcl(b);
+  return fromFcl([&] { return fcl::collide(a, ta, b, tb, request, result); }, a, b);
+}
+
+/// The core of fcl.py's collide and fcl_collide.
+py::tuple collideCore(const ObjectCore& a, const ObjectCore& b, const py::object& py_request,
+                      const std::string& engine) {
+  const fcl::CollisionRequestd request = toRequest(py_request);
   fcl::CollisionResultd result;
-  std::size_t n = 0;
-  requireBuilt(a.geometry.get(), "self_collide");
-  n = kdet_fcl::selfCollide(a.object.get(), request, result);
+  const std::size_t n = collideAt(a.geometry.get(), a.object->getTransform(), b.geometry.get(),
+                                  b.object->getTransform(), request, result, engine);
   return contactsOf(result, a.geometry.get(), n);
 }
 
-/// The core of fcl.py's distance (FCL's own, through kdet_fcl::distance).
-py::tuple distanceCore(const ObjectCore& a, const ObjectCore& b, bool nearest, bool is_signed) {
-  fcl::DistanceRequestd request(nearest);
-  request.enable_signed_distance = is_signed;
+py::tuple selfCollideCore(const ObjectCore& a, const py::object& py_request) {
+  const fcl::CollisionRequestd request = toRequest(py_request);
+  fcl::CollisionResultd result;
+  requireBuilt(a.geometry.get(), "self_collide");
+  const std::size_t n = kdet_fcl::selfCollide(a.object.get(), request, result);
+  return contactsOf(result, a.geometry.get(), n);
+}
+
+/// The signed distance of two spheres, in closed form: FCL 0.7's libccd path hangs when their
+/// centres (nearly) coincide (and its EPA answers others to about 1e-6). The nearest points are on
+/// the line of the centres, in world coordinates as FCL gives them; coincident centres take +x.
+double sphereSphereSigned(const fcl::Sphered& s1, const fcl::Transform3d& t1,
+                          const fcl::Sphered& s2, const fcl::Transform3d& t2,
+                          fcl::DistanceResultd& result) {
+  const fcl::Vector3d c1 = t1.translation(), c2 = t2.translation();
+  const double len = (c2 - c1).norm();
+  const fcl::Vector3d u = len > 0 ? fcl::Vector3d((c2 - c1) / len) : fcl::Vector3d::UnitX();
+  const double d = len - s1.radius - s2.radius;
+  result.update(d, &s1, &s2, fcl::DistanceResultd::NONE, fcl::DistanceResultd::NONE,
+                c1 + s1.radius * u, c2 - s2.radius * u);
+  return d;
+}
+
+/// One distance of two geometries at poses, FCL 0.7's where it answers; FCL's conventions: -1
+/// (unsigned, shapes) or 0 (meshes) for objects in collision, nearest points in world coordinates.
+/// - Unsigned distances run with GST_INDEP: libccd's GJK aborts the process on exactly touching
+///   pairs (Sphere-Ellipsoid, Capsule-Cone, ...; its assertions are on in Debian's build), and
+///   python-fcl never passed the solver to distance (it landed in rel_err).
+/// - A signed distance of objects that do not collide is their unsigned distance; of objects
+///   that collide, FCL's signed distance (libccd; GST_INDEP's aborts on most pairs), unless the
+///   deepest contact is within 1e-9 of their size (touching): FCL aborts there too, and the
+///   answer is 0 at the contact point (0 with NaN nearest points where FCL's collision test finds
+///   them apart and its GJK touching). Two spheres' signed distance is in closed form (FCL's hangs
+///   on coincident centres).
+double distanceAt(const Geometry* a, const fcl::Transform3d& ta, const Geometry* b,
+                  const fcl::Transform3d& tb, fcl::DistanceRequestd request,
+                  fcl::DistanceResultd& result) {
+  requireBuilt(a, "distance");
+  requireBuilt(b, "distance");
+  checkDistance(a, b);
+  const bool is_signed = request.enable_signed_distance;
+  request.enable_signed_distance = false;
+  request.gjk_solver_type = fcl::GST_INDEP;
+  // FCL's distance of two meshes has no sign (0 where they intersect): the unsigned one.
+  if (!is_signed || (a->getObjectType() == fcl::OT_BVH && b->getObjectType() == fcl::OT_BVH))
+    return fromFcl([&] { return kdet_fcl::distance(a, ta, b, tb, request, result); }, a, b);
+  if (a->getNodeType() == fcl::GEOM_SPHERE && b->getNodeType() == fcl::GEOM_SPHERE)
+    return sphereSphereSigned(static_cast<const fcl::Sphered&>(*a), ta,
+                              static_cast<const fcl::Sphered&>(*b), tb, result);
+  fcl::CollisionRequestd crequest(std::numeric_limits<int>::max(), true);
+  crequest.gjk_solver_type = collideSolver(a, b, fcl::GST_LIBCCD);
+  fcl::CollisionResultd contacts;
+  if (fromFcl([&] { return kdet_fcl::collide(a, ta, b, tb, crequest, contacts); }, a, b) == 0) {
+    const double d =
+        fromFcl([&] { return kdet_fcl::distance(a, ta, b, tb, request, result); }, a, b);
+    if (d >= 0) return d;
+    // The collision test finds them apart, GST_INDEP's GJK in contact: they touch within FCL's
+    // tolerance (about 1e-6). The distance is 0; there are no nearest points to give.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    result = fcl::DistanceResultd();
+    result.update(0.0, a, b, fcl::DistanceResultd::NONE, fcl::DistanceResultd::NONE,
+                  fcl::Vector3d::Constant(nan), fcl::Vector3d::Constant(nan));
+    return 0.0;
+  }
+  double depth = 0;
+  for (std::size_t i = 0; i < contacts.numContacts(); ++i)
+    depth = std::max(depth, contacts.getContact(i).penetration_depth);
+  const double size = std::max(a->aabb_radius, b->aabb_radius);
+  if (!(depth > 1e-9 * size)) {
+    const fcl::Vector3d p = contacts.getContact(0).pos;
+    result.update(0.0, a, b, fcl::DistanceResultd::NONE, fcl::DistanceResultd::NONE, p, p);
+    return 0.0;
+  }
+  request.enable_signed_distance = true;
+  request.gjk_solver_type = fcl::GST_LIBCCD;
+  return fromFcl([&] { return kdet_fcl::distance(a, ta, b, tb, request, result); }, a, b);
+}
+
+/// The core of fcl.py's distance.
+py::tuple distanceCore(const ObjectCore& a, const ObjectCore& b, const py::object& py_request) {
+  const char* what = "DistanceRequest";
+  fcl::DistanceRequestd request(attrOf<bool>(py_request, "enable_nearest_points", what));
+  request.enable_signed_distance = attrOf<bool>(py_request, "enable_signed_distance", what);
+  request.gjk_solver_type = enumOf<fcl::GJKSolverType>(py_request, "gjk_solver_type", what, 2);
   fcl::DistanceResultd result;
-  requireBuilt(a.geometry.get(), "distance");
-  requireBuilt(b.geometry.get(), "distance");
-  refitForFcl(a.geometry.get());
-  refitForFcl(b.geometry.get());
-  const double d = kdet_fcl::distance(a.object.get(), b.object.get(), request, result);
+  const double d = distanceAt(a.geometry.get(), a.object->getTransform(), b.geometry.get(),
+                              b.object->getTransform(), request, result);
   py::array_t<double> p0(3), p1(3);
   for (int j = 0; j < 3; ++j)
     p0.mutable_at(j) = result.nearest_points[0][j], p1.mutable_at(j) = result.nearest_points[1][j];
   const bool swapped = result.o1 != a.geometry.get();
   return py::make_tuple(d, result.min_distance, p0, p1, result.b1, result.b2, swapped);
+}
+
+/// A rigid motion from a start pose to an end pose: the translation linear in t, the rotation
+/// constant (CCDM_TRANS: the start's, as FCL's TranslationMotion) or turning at a constant rate
+/// about the object's origin (CCDM_LINEAR, as FCL's InterpMotion about its default reference point).
+struct RigidMotion {
+  fcl::Transform3d start;
+  fcl::Vector3d move;
+  Eigen::AngleAxisd turn;
+
+  RigidMotion(const fcl::Transform3d& from, const fcl::Transform3d& to, bool rotates)
+      : start(from), move(to.translation() - from.translation()),
+        turn(rotates ? Eigen::AngleAxisd(fcl::Matrix3d(to.linear() * from.linear().transpose()))
+                     : Eigen::AngleAxisd(0.0, fcl::Vector3d::UnitX())) {}
+
+  fcl::Transform3d at(double t) const {
+    fcl::Transform3d tf = fcl::Transform3d::Identity();
+    tf.linear() = Eigen::AngleAxisd(t * turn.angle(), turn.axis()).toRotationMatrix() * start.linear();
+    tf.translation() = start.translation() + t * move;
+    return tf;
+  }
+
+  /// A bound on how far any point of a geometry within `radius` of its origin moves per unit t.
+  double speedBound(double radius) const {
+    return move.norm() + (turn.angle() == 0 ? 0.0 : std::abs(turn.angle()) * radius);
+  }
+};
+
+/// The radius about a geometry's origin that holds it (from its local bounding box).
+double reachOf(const Geometry* g) { return g->aabb_center.norm() + g->aabb_radius; }
+
+/// The core of fcl.py's continuousCollide. FCL 0.7's own continuous collision crashes, misses
+/// contacts or is not implemented for most pairs (the sweep's log), so it is not called: both
+/// solvers run here on the discrete queries above.
+/// - CCDC_NAIVE: FCL's rule: n = min(num_max_iterations, ceil(1 / toc_err)) poses at t = i/(n-1);
+///   the first that collides (kdet_fcl::collide: kDet decides mesh pairs) is the time of contact.
+/// - CCDC_CONSERVATIVE_ADVANCEMENT: from t = 0, advance by distance / (a bound on the points'
+///   relative speed), which cannot pass a contact; a contact is reported where that step falls
+///   below toc_err: the time is never later than the first touch, and the objects are then closer
+///   than toc_err times that speed bound.
+/// Returns (time of contact, is_collide, time_of_contact); 1.0 and False for none.
+py::tuple continuousCore(const ObjectCore& a, const py::object& r1, const py::object& t1,
+                         const ObjectCore& b, const py::object& r2, const py::object& t2,
+                         const py::object& py_request) {
+  const char* what = "ContinuousCollisionRequest";
+  const std::size_t iterations = countOf(py_request, "num_max_iterations", what);
+  const double toc_err = attrOf<double>(py_request, "toc_err", what);
+  const auto motion = enumOf<fcl::CCDMotionType>(py_request, "ccd_motion_type", what, 4);
+  const auto gjk = enumOf<fcl::GJKSolverType>(py_request, "gjk_solver_type", what, 2);
+  const auto solver = enumOf<fcl::CCDSolverType>(py_request, "ccd_solver_type", what, 4);
+  if (!(std::isfinite(toc_err) && toc_err > 0 && toc_err <= 1))
+    throw InvalidInputError("ContinuousCollisionRequest.toc_err must be in (0, 1]");
+  if (motion == fcl::CCDM_SCREW || motion == fcl::CCDM_SPLINE)
+    throw UnsupportedQuery("continuousCollide: only CCDM_TRANS and CCDM_LINEAR motions are "
+                           "supported (FCL 0.7's screw and spline motions miss contacts)");
+  if (solver == fcl::CCDC_RAY_SHOOTING || solver == fcl::CCDC_POLYNOMIAL_SOLVER)
+    throw UnsupportedQuery("continuousCollide: only CCDC_NAIVE and CCDC_CONSERVATIVE_ADVANCEMENT "
+                           "are supported (FCL 0.7 implements neither of the others)");
+  const Geometry* ga = a.geometry.get();
+  const Geometry* gb = b.geometry.get();
+  const RigidMotion ma(a.object->getTransform(), toFclTransform(r1, t1, "continuousCollide tf1_end"),
+                       motion == fcl::CCDM_LINEAR);
+  const RigidMotion mb(b.object->getTransform(), toFclTransform(r2, t2, "continuousCollide tf2_end"),
+                       motion == fcl::CCDM_LINEAR);
+  auto hit = [](double t) { return py::make_tuple(t, true, t); };
+  const py::tuple none = py::make_tuple(1.0, false, 1.0);
+  if (solver == fcl::CCDC_NAIVE) {
+    const double n = std::min(double(iterations), std::ceil(1 / toc_err));
+    if (n < 2)
+      throw InvalidInputError("continuousCollide (CCDC_NAIVE): num_max_iterations and 1 / toc_err "
+                              "must both be at least 2 (the poses at t = 0 and t = 1)");
+    fcl::CollisionRequestd request(1, false);
+    request.gjk_solver_type = gjk;
+    for (double i = 0; i < n; ++i) {
+      const double t = i / (n - 1);
+      fcl::CollisionResultd result;
+      if (collideAt(ga, ma.at(t), gb, mb.at(t), request, result, "kdet") > 0) return hit(t);
+    }
+    return none;
+  }
+  // Conservative advancement.
+  const double speed = ma.speedBound(reachOf(ga)) + mb.speedBound(reachOf(gb));
+  if (!std::isfinite(speed))
+    throw UnsupportedQuery("continuousCollide (CCDC_CONSERVATIVE_ADVANCEMENT): an unbounded "
+                           "geometry cannot turn; use CCDM_TRANS or CCDC_NAIVE");
+  fcl::DistanceRequestd request;
+  request.gjk_solver_type = gjk;
+  for (double t = 0; t <= 1;) {
+    fcl::DistanceResultd result;
+    const double d = distanceAt(ga, ma.at(t), gb, mb.at(t), request, result);
+    if (d <= 0) return hit(t);  // FCL's distance is -1 (shapes) or 0 (meshes) when they touch
+    if (speed == 0) break;
+    const double step = d / speed;
+    if (step < toc_err) return hit(t);
+    t += step;
+  }
+  return none;
 }
 
 /// A DynamicAABBTree manager whose callbacks are Python callables; the objects' user data is
@@ -532,26 +1000,53 @@ struct ManagerCore {
   fcl::DynamicAABBTreeCollisionManagerd manager;
 };
 
-struct CallbackData {
-  py::object callback;
-  py::object cdata;
-  std::unique_ptr<py::error_already_set> error;
-};
-
 py::object pythonObjectOf(fcl::CollisionObjectd* o) {
   auto* core = static_cast<ObjectCore*>(o->getUserData());
   return py::cast(core, py::return_value_policy::reference);
 }
 
-bool managerCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data) {
-  auto* d = static_cast<CallbackData*>(data);
-  if (d->error) return true;
-  try {
-    return py::cast<bool>(d->callback(pythonObjectOf(o1), pythonObjectOf(o2), d->cdata));
-  } catch (py::error_already_set& e) {
-    d->error = std::make_unique<py::error_already_set>(std::move(e));
-    return true;  // stop the traversal; the error is raised when it returns
+struct CallbackData {
+  py::object callback;
+  py::object cdata;
+  std::exception_ptr error;  // the callback's exception, raised when the traversal returns
+
+  /// Calls the Python callback on a pair; after an exception, stops the traversal.
+  template <class Read>
+  bool call(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, Read read) {
+    if (error) return true;
+    try {
+      return read(callback(pythonObjectOf(o1), pythonObjectOf(o2), cdata));
+    } catch (...) {
+      error = std::current_exception();
+      return true;
+    }
   }
+  void raise() {
+    if (error) std::rethrow_exception(error);
+  }
+};
+
+
+/// A collision callback returns whether to stop (python-fcl: a bool).
+bool managerCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data) {
+  return static_cast<CallbackData*>(data)->call(o1, o2, [](const py::object& r) {
+    return py::cast<bool>(r);
+  });
+}
+
+/// A distance callback returns (stop, distance so far) (python-fcl's DistanceFunction).
+bool managerDistanceCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data,
+                             double& dist) {
+  return static_cast<CallbackData*>(data)->call(o1, o2, [&dist](const py::object& r) {
+    py::sequence pair = py::reinterpret_borrow<py::sequence>(r);
+    if (!py::isinstance<py::sequence>(r) || py::len(pair) != 2)
+      throw InvalidInputError("a distance callback returns (done, distance), not " +
+                              std::string(py::str(r)));
+    const double d = py::cast<double>(pair[1]);
+    if (std::isnan(d)) throw InvalidInputError("a distance callback returned a NaN distance");
+    dist = d;
+    return py::cast<bool>(pair[0]);
+  });
 }
 
 std::vector<fcl::CollisionObjectd*> objectsOf(const std::vector<ObjectCore*>& cores) {
@@ -562,6 +1057,24 @@ std::vector<fcl::CollisionObjectd*> objectsOf(const std::vector<ObjectCore*>& co
     out.push_back(c->object.get());
   }
   return out;
+}
+
+/// A public field of FCL's manager (`field` returns a reference to it) as a read-write property;
+/// an int field refuses values outside [0, 2^31) (FCL uses them as tree levels and pass counts).
+template <class Field>
+void bindManagerField(py::class_<ManagerCore>& c, const char* name, Field field) {
+  using T = std::remove_reference_t<decltype(field(std::declval<ManagerCore&>().manager))>;
+  c.def_property(name, [field](ManagerCore& self) { return field(self.manager); },
+                 [field, name](ManagerCore& self, const py::object& v) {
+                   if constexpr (std::is_same<T, bool>::value) {
+                     field(self.manager) = attrValue<bool>(v, name);
+                   } else {
+                     const long long x = attrValue<long long>(v, name);
+                     if (x < 0 || x > std::numeric_limits<int>::max())
+                       throw InvalidInputError(std::string(name) + " must be in [0, 2^31)");
+                     field(self.manager) = static_cast<T>(x);
+                   }
+                 });
 }
 
 void bindFclCore(py::module_& m) {
@@ -591,12 +1104,12 @@ void bindFclCore(py::module_& m) {
       .def("endModel", [](Meshd& self) { return self.endModel(); })
       .def("addVertex", [](Meshd& self, double x, double y, double z) {
         return checkBvh(self.addVertex(fcl::Vector3d(x, y, z)));
-      })
+      }, py::arg("x"), py::arg("y"), py::arg("z"))
       .def("addTriangle", [](Meshd& self, const py::object& a, const py::object& b,
                              const py::object& c) {
         return checkBvh(self.addTriangle(toVec3(a, "addTriangle"), toVec3(b, "addTriangle"),
                                          toVec3(c, "addTriangle")));
-      })
+      }, py::arg("v1"), py::arg("v2"), py::arg("v3"))
       .def("addSubModel", [](Meshd& self, const py::object& verts, const py::object& triangles) {
         const std::vector<fcl::Vector3d> ps = toFclPoints(verts, "addSubModel vertices");
         const std::vector<Triangle> ts = toTriangles(triangles, "addSubModel triangles");
@@ -613,14 +1126,14 @@ void bindFclCore(py::module_& m) {
         }
         if (ps.empty() && ft.empty()) return true;
         return checkBvh(self.addSubModel(ps, ft));
-      })
+      }, py::arg("verts"), py::arg("triangles"))
       .def("beginUpdateModel", [](Meshd& self) { return checkBvh(self.beginUpdateModel()); })
       .def("updateVertex", [](Meshd& self, double x, double y, double z) {
         return checkBvh(self.updateVertex(fcl::Vector3d(x, y, z)));
-      })
+      }, py::arg("x"), py::arg("y"), py::arg("z"))
       .def("updateSubModel", [](Meshd& self, const py::object& verts) {
         return checkBvh(self.updateSubModel(toFclPoints(verts, "updateSubModel")));
-      })
+      }, py::arg("verts"))
       .def("endUpdateModel", [](Meshd& self, bool refit, bool bottomup) {
         return checkBvh(self.endUpdateModel(refit, bottomup));
       }, py::arg("refit") = true, py::arg("bottomup") = true)
@@ -680,6 +1193,47 @@ void bindFclCore(py::module_& m) {
       .def_readonly("radius", &fcl::Coned::radius)
       .def_readonly("lz", &fcl::Coned::lz);
 
+  auto vec3Array = [](const fcl::Vector3d& v) {
+    py::array_t<double> a(3);
+    for (int j = 0; j < 3; ++j) a.mutable_at(j) = v[j];
+    return a;
+  };
+  py::class_<fcl::TrianglePd, Geometry, std::shared_ptr<fcl::TrianglePd>>(m, "TriangleP")
+      .def(py::init([](const py::object& a, const py::object& b, const py::object& c) {
+             return std::make_shared<fcl::TrianglePd>(finiteVec3(a, "TriangleP a"),
+                                                      finiteVec3(b, "TriangleP b"),
+                                                      finiteVec3(c, "TriangleP c"));
+           }), py::arg("a"), py::arg("b"), py::arg("c"))
+      .def_property_readonly("a", [vec3Array](const fcl::TrianglePd& t) { return vec3Array(t.a); })
+      .def_property_readonly("b", [vec3Array](const fcl::TrianglePd& t) { return vec3Array(t.b); })
+      .def_property_readonly("c", [vec3Array](const fcl::TrianglePd& t) { return vec3Array(t.c); });
+  py::class_<fcl::Convexd, Geometry, std::shared_ptr<fcl::Convexd>>(m, "Convex",
+      "A convex polytope: vertices (n, 3) and faces encoded as python-fcl's (and FCL's): for each "
+      "face its vertex count, then its vertex indices, counter-clockwise seen from outside.")
+      .def(py::init(&makeConvex), py::arg("vertices"), py::arg("num_faces"), py::arg("faces"))
+      .def_property_readonly("num_faces", &fcl::Convexd::getFaceCount);
+  // Halfspace: the points x with n.x <= d; Plane: n.x = d. FCL stores n normalized (d scaled).
+  py::class_<fcl::Halfspaced, Geometry, std::shared_ptr<fcl::Halfspaced>>(m, "Halfspace")
+      .def(py::init([](const py::object& n, double d) {
+             const auto nd = planeOf(n, d, "Halfspace");
+             return std::make_shared<fcl::Halfspaced>(nd.first, nd.second);
+           }), py::arg("n"), py::arg("d"))
+      .def_property_readonly("n", [vec3Array](const fcl::Halfspaced& h) { return vec3Array(h.n); })
+      .def_readonly("d", &fcl::Halfspaced::d);
+  py::class_<fcl::Planed, Geometry, std::shared_ptr<fcl::Planed>>(m, "Plane")
+      .def(py::init([](const py::object& n, double d) {
+             const auto nd = planeOf(n, d, "Plane");
+             return std::make_shared<fcl::Planed>(nd.first, nd.second);
+           }), py::arg("n"), py::arg("d"))
+      .def_property_readonly("n", [vec3Array](const fcl::Planed& h) { return vec3Array(h.n); })
+      .def_readonly("d", &fcl::Planed::d);
+#if FCL_HAVE_OCTOMAP
+  py::class_<fcl::OcTreed, Geometry, std::shared_ptr<fcl::OcTreed>>(m, "OcTree",
+      "An octomap occupancy tree of resolution r from octomap's binary node data (what "
+      "OcTree::writeBinaryData writes: the binary file's part after its header), as python-fcl's.")
+      .def(py::init(&makeOcTree), py::arg("r"), py::arg("data"));
+#endif
+
   py::class_<ObjectCore>(m, "_ObjectCore")
       .def(py::init([](std::shared_ptr<Geometry> geometry, const py::object& rotation,
                        const py::object& translation) {
@@ -712,14 +1266,18 @@ void bindFclCore(py::module_& m) {
         return t;
       })
       .def("getObjectType", [](const ObjectCore& self) { return int(self.object->getObjectType()); })
-      .def("getNodeType", [](const ObjectCore& self) { return int(self.object->getNodeType()); });
+      .def("getNodeType", [](const ObjectCore& self) { return int(self.object->getNodeType()); })
+      .def("isOccupied", [](const ObjectCore& self) { return self.object->isOccupied(); })
+      .def("isFree", [](const ObjectCore& self) { return self.object->isFree(); })
+      .def("isUncertain", [](const ObjectCore& self) { return self.object->isUncertain(); });
 
   m.def("_collide", &collideCore);
   m.def("_self_collide", &selfCollideCore);
   m.def("_distance", &distanceCore);
+  m.def("_continuous_collide", &continuousCore);
 
-  py::class_<ManagerCore>(m, "_ManagerCore")
-      .def(py::init<>())
+  py::class_<ManagerCore> manager(m, "_ManagerCore");
+  manager.def(py::init<>())
       .def("_register", [](ManagerCore& self, const std::vector<ObjectCore*>& objs) {
         std::vector<fcl::CollisionObjectd*> os = objectsOf(objs);
         self.manager.registerObjects(os);
@@ -741,20 +1299,50 @@ void bindFclCore(py::module_& m) {
       .def("_collide", [](ManagerCore& self, const py::object& cdata, const py::object& callback) {
         CallbackData d{callback, cdata, nullptr};
         self.manager.collide(&d, managerCallback);
-        if (d.error) throw std::move(*d.error);
+        d.raise();
       })
       .def("_collide_object", [](ManagerCore& self, ObjectCore& o, const py::object& cdata,
                                  const py::object& callback) {
         CallbackData d{callback, cdata, nullptr};
         self.manager.collide(o.object.get(), &d, managerCallback);
-        if (d.error) throw std::move(*d.error);
+        d.raise();
       })
       .def("_collide_manager", [](ManagerCore& self, ManagerCore& other, const py::object& cdata,
                                   const py::object& callback) {
         CallbackData d{callback, cdata, nullptr};
         self.manager.collide(&other.manager, &d, managerCallback);
-        if (d.error) throw std::move(*d.error);
+        d.raise();
+      })
+      .def("_distance", [](ManagerCore& self, const py::object& cdata, const py::object& callback) {
+        CallbackData d{callback, cdata, nullptr};
+        self.manager.distance(&d, managerDistanceCallback);
+        d.raise();
+      })
+      .def("_distance_object", [](ManagerCore& self, ObjectCore& o, const py::object& cdata,
+                                  const py::object& callback) {
+        CallbackData d{callback, cdata, nullptr};
+        self.manager.distance(o.object.get(), &d, managerDistanceCallback);
+        d.raise();
+      })
+      .def("_distance_manager", [](ManagerCore& self, ManagerCore& other, const py::object& cdata,
+                                   const py::object& callback) {
+        CallbackData d{callback, cdata, nullptr};
+        self.manager.distance(&other.manager, &d, managerDistanceCallback);
+        d.raise();
       });
+  // The tree's tuning fields (python-fcl's properties of the same names).
+#define KDET_FCL_MANAGER_FIELD(name) \
+  bindManagerField(manager, #name, [](fcl::DynamicAABBTreeCollisionManagerd& x) -> auto& { \
+    return x.name;                                                                      \
+  })
+  KDET_FCL_MANAGER_FIELD(max_tree_nonbalanced_level);
+  KDET_FCL_MANAGER_FIELD(tree_incremental_balance_pass);
+  KDET_FCL_MANAGER_FIELD(tree_topdown_balance_threshold);
+  KDET_FCL_MANAGER_FIELD(tree_topdown_level);
+  KDET_FCL_MANAGER_FIELD(tree_init_level);
+  KDET_FCL_MANAGER_FIELD(octree_as_geometry_collide);
+  KDET_FCL_MANAGER_FIELD(octree_as_geometry_distance);
+#undef KDET_FCL_MANAGER_FIELD
 }
 
 }  // namespace
@@ -775,17 +1363,20 @@ PYBIND11_MODULE(_kdet_fcl, m) {
   py::object mesh_file = sub("kdet_fcl.MeshFileError", PyExc_OSError);
   py::object unavailable = sub("kdet_fcl.BackendUnavailableError", PyExc_RuntimeError);
   py::object cuda = sub("kdet_fcl.CudaError", PyExc_RuntimeError);
+  py::object unsupported = sub("kdet_fcl.UnsupportedQueryError", PyExc_NotImplementedError);
   m.attr("Error") = error;
   m.attr("InvalidInputError") = invalid;
   m.attr("MeshFileError") = mesh_file;
   m.attr("BackendUnavailableError") = unavailable;
   m.attr("CudaError") = cuda;
+  m.attr("UnsupportedQueryError") = unsupported;
   // The translator's own references, never dropped (the module's attributes may be deleted).
   static PyObject* e_error = error.inc_ref().ptr();
   static PyObject* e_invalid = invalid.inc_ref().ptr();
   static PyObject* e_mesh_file = mesh_file.inc_ref().ptr();
   static PyObject* e_unavailable = unavailable.inc_ref().ptr();
   static PyObject* e_cuda = cuda.inc_ref().ptr();
+  static PyObject* e_unsupported = unsupported.inc_ref().ptr();
   // Local: only this module's calls are translated by it.
   py::register_local_exception_translator([](std::exception_ptr p) {
     try {
@@ -800,6 +1391,8 @@ PYBIND11_MODULE(_kdet_fcl, m) {
       PyErr_SetString(e_cuda, e.what());
     } catch (const Error& e) {
       PyErr_SetString(e_error, e.what());
+    } catch (const UnsupportedQuery& e) {
+      PyErr_SetString(e_unsupported, e.what());
     }
   });
 

@@ -17,7 +17,8 @@ Pairs: each intersecting pair exactly once, decided by an exact predicate (touch
 the order is deterministic but not sorted on the CPU (np.unique(pairs, axis=0) sorts it).
 `max_pairs=k` stops after k pairs (fewer than k rows: the list is complete).
 Errors: InvalidInputError (a ValueError) for bad arrays, NaN/Inf coordinates, out-of-range
-indices and non-rigid poses; MeshFileError (an OSError); BackendUnavailableError and CudaError.
+indices and non-rigid poses; MeshFileError (an OSError); BackendUnavailableError and CudaError;
+UnsupportedQueryError (a NotImplementedError) for what FCL 0.7 cannot answer (kdet_fcl.fcl).
 """
 from ._kdet_fcl import (  # noqa: F401
     BackendUnavailableError,
@@ -27,6 +28,7 @@ from ._kdet_fcl import (  # noqa: F401
     Mesh,
     MeshF32,
     MeshFileError,
+    UnsupportedQueryError,
     analyze_kfree,
     brute_force_intersect,
     brute_force_intersect_self,
@@ -48,7 +50,7 @@ __all__ = [
     "brute_force_intersect", "brute_force_intersect_self", "analyze_kfree", "read_mesh",
     "write_mesh", "make_sphere", "make_draped_cloth", "built_with_cuda", "cuda_device_count", "cuda_device_description",
     "cuda_available", "Error", "InvalidInputError", "MeshFileError",
-    "BackendUnavailableError", "CudaError",
+    "BackendUnavailableError", "CudaError", "UnsupportedQueryError",
 ]
 
 

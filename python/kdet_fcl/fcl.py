@@ -12,9 +12,18 @@ Code written for python-fcl changes its import and keeps the rest:
 What is the same as python-fcl: the classes and calls below, their arguments and defaults,
 results that accumulate in the Python result, Contact's fields (o1/o2 the geometries, b1/b2
 the triangle indices, pos/normal/penetration_depth), DynamicAABBTreeCollisionManager with
-Python callbacks, and defaultCollisionCallback's stop rule. Mesh-mesh pairs go through
-kdet_fcl::collide (the C++ drop-in: exact pairs, FCL's conventions, README "Switching from
-FCL"); shape pairs (Box, Sphere, ...) and distance go to FCL 0.7 itself.
+Python callbacks (collide and distance, three forms each), and the default callbacks' stop
+rules. Mesh-mesh pairs go through kdet_fcl::collide (the C++ drop-in: exact pairs, FCL's
+conventions, README "Switching from FCL"); shape pairs (Box, Sphere, Convex, Halfspace, OcTree,
+...) and distances go to FCL 0.7 itself. `python3 -m kdet_fcl.as_fcl program.py` runs a
+python-fcl program unmodified on this module.
+
+What differs, where FCL 0.7 would crash, hang or answer wrongly (python-fcl passes those on):
+queries it has no test for, distances to a Halfspace or Plane and collisions of two unbounded
+shapes raise UnsupportedQueryError (a NotImplementedError); unsigned distances run on GJK indep
+and signed ones are decided by a collision test first (libccd aborts on touching shapes);
+continuousCollide runs naive sampling (FCL's rule) or conservative advancement here, on the
+discrete queries, for CCDM_TRANS and CCDM_LINEAR motions (README "Python").
 
 What kDet adds: self_collide (FCL has none), BVHModel(kdet_only=True) for deforming meshes
 (updates skip FCL's refit), and fcl_collide, FCL's own answer in the same process, for
@@ -31,11 +40,21 @@ from ._kdet_fcl import (  # noqa: F401
     Capsule,
     CollisionGeometry,
     Cone,
+    Convex,
     Cylinder,
     Ellipsoid,
+    Halfspace,
     InvalidInputError,
+    Plane,
+    UnsupportedQueryError,
     Sphere,
+    TriangleP,
 )
+
+try:  # FCL built with octomap (Debian's is)
+    from ._kdet_fcl import OcTree  # noqa: F401
+except ImportError:  # pragma: no cover
+    pass
 
 
 class OBJECT_TYPE:
@@ -46,6 +65,15 @@ class NODE_TYPE:
     (BV_UNKNOWN, BV_AABB, BV_OBB, BV_RSS, BV_kIOS, BV_OBBRSS, BV_KDOP16, BV_KDOP18, BV_KDOP24,
      GEOM_BOX, GEOM_SPHERE, GEOM_ELLIPSOID, GEOM_CAPSULE, GEOM_CONE, GEOM_CYLINDER,
      GEOM_CONVEX, GEOM_PLANE, GEOM_HALFSPACE, GEOM_TRIANGLE, GEOM_OCTREE, NODE_COUNT) = range(21)
+
+
+class CCDMotionType:
+    CCDM_TRANS, CCDM_LINEAR, CCDM_SCREW, CCDM_SPLINE = range(4)
+
+
+class CCDSolverType:
+    (CCDC_NAIVE, CCDC_CONSERVATIVE_ADVANCEMENT, CCDC_RAY_SHOOTING,
+     CCDC_POLYNOMIAL_SOLVER) = range(4)
 
 
 class GJKSolverType:
@@ -223,6 +251,24 @@ class CollisionResult:
         self.cost_sources = []
 
 
+class ContinuousCollisionRequest:
+    def __init__(self, num_max_iterations=10, toc_err=0.0001,
+                 ccd_motion_type=CCDMotionType.CCDM_TRANS,
+                 gjk_solver_type=GJKSolverType.GST_LIBCCD,
+                 ccd_solver_type=CCDSolverType.CCDC_CONSERVATIVE_ADVANCEMENT):
+        self.num_max_iterations = num_max_iterations
+        self.toc_err = toc_err
+        self.ccd_motion_type = ccd_motion_type
+        self.gjk_solver_type = gjk_solver_type
+        self.ccd_solver_type = ccd_solver_type
+
+
+class ContinuousCollisionResult:
+    def __init__(self, is_collide=False, time_of_contact=1.0):
+        self.is_collide = is_collide
+        self.time_of_contact = time_of_contact
+
+
 class DistanceRequest:
     def __init__(self, enable_nearest_points=False, enable_signed_distance=False,
                  gjk_solver_type=GJKSolverType.GST_LIBCCD):
@@ -262,7 +308,7 @@ def _check_object(o, name):
 
 
 def _fill(result, core_out, g1, g2):
-    n, hit, ids, normal, pos, depth, swapped = core_out
+    n, hit, ids, normal, pos, depth, swapped, costs = core_out
     result.is_collision = result.is_collision or bool(hit)
     for i in range(len(ids)):
         c = Contact()
@@ -271,6 +317,12 @@ def _fill(result, core_out, g1, g2):
         c.normal, c.pos = normal[i], pos[i]
         c.penetration_depth = float(depth[i])
         result.contacts.append(c)
+    lo, hi, density, total = costs if costs is not None else ((), (), (), ())
+    for i in range(len(density)):
+        c = CostSource()
+        c.aabb_min, c.aabb_max = lo[i], hi[i]
+        c.cost_density, c.total_cost = float(density[i]), float(total[i])
+        result.cost_sources.append(c)
     return int(n)
 
 
@@ -279,9 +331,7 @@ def _collide(o1, o2, request, result, engine):
     _check_object(o2, "o2")
     request = CollisionRequest() if request is None else request
     result = CollisionResult() if result is None else result
-    out = _core._collide(o1, o2, int(request.num_max_contacts), bool(request.enable_contact),
-                         engine)
-    return _fill(result, out, o1._geom, o2._geom)
+    return _fill(result, _core._collide(o1, o2, request, engine), o1._geom, o2._geom)
 
 
 def collide(o1, o2, request=None, result=None):
@@ -301,8 +351,7 @@ def self_collide(o, request=None, result=None):
     _check_object(o, "o")
     request = CollisionRequest() if request is None else request
     result = CollisionResult() if result is None else result
-    out = _core._self_collide(o, int(request.num_max_contacts), bool(request.enable_contact))
-    return _fill(result, out, o._geom, o._geom)
+    return _fill(result, _core._self_collide(o, request), o._geom, o._geom)
 
 
 def distance(o1, o2, request=None, result=None):
@@ -311,14 +360,31 @@ def distance(o1, o2, request=None, result=None):
     _check_object(o2, "o2")
     request = DistanceRequest() if request is None else request
     result = DistanceResult() if result is None else result
-    d, dmin, p0, p1, b1, b2, swapped = _core._distance(
-        o1, o2, bool(request.enable_nearest_points), bool(request.enable_signed_distance))
+    d, dmin, p0, p1, b1, b2, swapped = _core._distance(o1, o2, request)
     if result.min_distance > dmin:
         result.min_distance = dmin
         result.nearest_points = [p0, p1]
         result.o1, result.o2 = (o2._geom, o1._geom) if swapped else (o1._geom, o2._geom)
         result.b1, result.b2 = int(b1), int(b2)
     return d
+
+
+def continuousCollide(o1, tf1_end, o2, tf2_end, request=None, result=None):
+    """FCL 0.7's continuous collision from the objects' poses to tf1_end/tf2_end (kDet has no
+    continuous query). Returns the time of contact in [0, 1] (1: none), as python-fcl."""
+    _check_object(o1, "o1")
+    _check_object(o2, "o2")
+    for tf, name in ((tf1_end, "tf1_end"), (tf2_end, "tf2_end")):
+        if not isinstance(tf, Transform):
+            raise TypeError("%s must be a kdet_fcl.fcl.Transform, not %s"
+                            % (name, type(tf).__name__))
+    request = ContinuousCollisionRequest() if request is None else request
+    result = ContinuousCollisionResult() if result is None else result
+    toc, hit, time_of_contact = _core._continuous_collide(
+        o1, tf1_end._R, tf1_end._t, o2, tf2_end._R, tf2_end._t, request)
+    result.is_collide = result.is_collide or bool(hit)
+    result.time_of_contact = min(time_of_contact, result.time_of_contact)
+    return toc
 
 
 def defaultCollisionCallback(o1, o2, cdata):
@@ -382,13 +448,35 @@ class DynamicAABBTreeCollisionManager(_core._ManagerCore):
 
     def collide(self, *args):
         """collide(cdata, callback); collide(obj, cdata, callback);
-        collide(other_manager, cdata, callback)."""
+        collide(other_manager, cdata, callback). A callback returns True to stop."""
+        self._dispatch("collide", args, self._collide, self._collide_object,
+                       self._collide_manager)
+
+    def distance(self, *args):
+        """distance(ddata, callback); distance(obj, ddata, callback);
+        distance(other_manager, ddata, callback). A callback returns (stop, distance)."""
+        self._dispatch("distance", args, self._distance, self._distance_object,
+                       self._distance_manager)
+
+    def _dispatch(self, name, args, all_pairs, with_object, with_manager):
         if len(args) == 2 and callable(args[1]):
-            self._collide(args[0], args[1])
+            all_pairs(args[0], args[1])
         elif len(args) == 3 and isinstance(args[0], DynamicAABBTreeCollisionManager):
-            self._collide_manager(args[0], args[1], args[2])
+            with_manager(args[0], args[1], args[2])
         elif len(args) == 3 and isinstance(args[0], CollisionObject) and callable(args[2]):
-            self._collide_object(args[0], args[1], args[2])
+            with_object(args[0], args[1], args[2])
         else:
-            raise ValueError("collide(cdata, callback), collide(obj, cdata, callback) or "
-                             "collide(manager, cdata, callback)")
+            raise ValueError("%s(data, callback), %s(obj, data, callback) or "
+                             "%s(manager, data, callback)" % (name, name, name))
+
+
+__all__ = [
+    "CollisionObject", "CollisionGeometry", "Transform", "TriangleP", "Box", "Sphere",
+    "Ellipsoid", "Capsule", "Cone", "Convex", "Cylinder", "Halfspace", "Plane", "BVHModel",
+    "DynamicAABBTreeCollisionManager", "collide", "continuousCollide", "distance",
+    "defaultCollisionCallback", "defaultDistanceCallback", "OBJECT_TYPE", "NODE_TYPE",
+    "CCDMotionType", "CCDSolverType", "GJKSolverType", "Contact", "CostSource",
+    "CollisionRequest", "CollisionResult", "ContinuousCollisionRequest",
+    "ContinuousCollisionResult", "DistanceRequest", "DistanceResult", "CollisionData",
+    "DistanceData", "self_collide", "fcl_collide", "InvalidInputError", "UnsupportedQueryError",
+] + (["OcTree"] if "OcTree" in globals() else [])
