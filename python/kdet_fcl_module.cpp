@@ -835,8 +835,9 @@ double sphereSphereSigned(const fcl::Sphered& s1, const fcl::Transform3d& t1,
 ///   that collide, FCL's signed distance (libccd; GST_INDEP's aborts on most pairs), unless the
 ///   deepest contact is within 1e-9 of their size (touching): FCL aborts there too, and the
 ///   answer is 0 at the contact point (0 with NaN nearest points where FCL's collision test finds
-///   them apart and its GJK touching). Two spheres' signed distance is in closed form (FCL's hangs
-///   on coincident centres).
+///   them apart and its GJK touching). A mesh or octree with a shape: minus the deepest contact's
+///   penetration depth (FCL's rule, on all contacts). Two spheres' signed distance is in closed
+///   form (FCL's hangs on coincident centres).
 double distanceAt(const Geometry* a, const fcl::Transform3d& ta, const Geometry* b,
                   const fcl::Transform3d& tb, fcl::DistanceRequestd request,
                   fcl::DistanceResultd& result) {
@@ -867,14 +868,23 @@ double distanceAt(const Geometry* a, const fcl::Transform3d& ta, const Geometry*
                   fcl::Vector3d::Constant(nan), fcl::Vector3d::Constant(nan));
     return 0.0;
   }
-  double depth = 0;
-  for (std::size_t i = 0; i < contacts.numContacts(); ++i)
-    depth = std::max(depth, contacts.getContact(i).penetration_depth);
+  std::size_t deepest = 0;
+  for (std::size_t i = 1; i < contacts.numContacts(); ++i)
+    if (contacts.getContact(i).penetration_depth > contacts.getContact(deepest).penetration_depth)
+      deepest = i;
+  const fcl::Contactd& contact = contacts.getContact(deepest);
   const double size = std::max(a->aabb_radius, b->aabb_radius);
-  if (!(depth > 1e-9 * size)) {
-    const fcl::Vector3d p = contacts.getContact(0).pos;
+  const fcl::Vector3d p = contact.pos;
+  if (!(contact.penetration_depth > 1e-9 * size)) {
     result.update(0.0, a, b, fcl::DistanceResultd::NONE, fcl::DistanceResultd::NONE, p, p);
     return 0.0;
+  }
+  if (a->getObjectType() != fcl::OT_GEOM || b->getObjectType() != fcl::OT_GEOM) {
+    // A mesh or an octree with a shape: FCL's own rule (minus the penetration depth of a contact,
+    // both nearest points at it), which FCL computes from one contact and asserts it deeper than
+    // 0 (an abort where it is not); here from the deepest contact.
+    result.update(-contact.penetration_depth, a, b, contact.b1, contact.b2, p, p);
+    return -contact.penetration_depth;
   }
   request.enable_signed_distance = true;
   request.gjk_solver_type = fcl::GST_LIBCCD;

@@ -46,9 +46,9 @@ from ._kdet_fcl import (  # noqa: F401
     Halfspace,
     InvalidInputError,
     Plane,
-    UnsupportedQueryError,
     Sphere,
     TriangleP,
+    UnsupportedQueryError,
 )
 
 try:  # FCL built with octomap (Debian's is)
@@ -370,8 +370,11 @@ def distance(o1, o2, request=None, result=None):
 
 
 def continuousCollide(o1, tf1_end, o2, tf2_end, request=None, result=None):
-    """FCL 0.7's continuous collision from the objects' poses to tf1_end/tf2_end (kDet has no
-    continuous query). Returns the time of contact in [0, 1] (1: none), as python-fcl."""
+    """Continuous collision from the objects' poses to tf1_end/tf2_end: CCDC_NAIVE samples poses
+    by FCL's rule, CCDC_CONSERVATIVE_ADVANCEMENT (the default) advances by distance and never
+    reports a time after the first touch; both run here on the discrete queries (FCL 0.7's own
+    crashes or misses contacts on most pairs). CCDM_TRANS and CCDM_LINEAR motions. Returns the
+    time of contact in [0, 1] (1: none), as python-fcl does."""
     _check_object(o1, "o1")
     _check_object(o2, "o2")
     for tf, name in ((tf1_end, "tf1_end"), (tf2_end, "tf2_end")):

@@ -4,11 +4,13 @@ with --ccd also continuousCollide (every motion and solver type). Each query mus
 raise UnsupportedQueryError: FCL 0.7 crashes, hangs or aborts on some of these (python-fcl passes
 them on), which kdet_fcl.fcl refuses or answers another way.
 
-    python3 fcl_pair_sweep.py [--quick] [--ccd]
+    python3 fcl_pair_sweep.py [--quick] [--ccd] [--random N [--seed S]]
 
 Prints one line per query and exits 1 on any other exception. A crash or a hang ends the
 process: run it in a child process (test_fcl_api.py does) or under `timeout`.
---quick: one solver for the touching poses' unsigned distance (the tests' run, ~2 s).
+--quick: one solver except at the touching poses (the tests' run).
+--random N: also N random poses per pair of bounded types (a third of them on a 0.1 grid, where
+exact contacts happen; half of them turned), distance, signed distance and collide, both solvers.
 """
 import itertools
 import sys
@@ -91,6 +93,28 @@ def main(argv):
                               o1, fcl.Transform(np.array([3.0, 0, 0])), o2, fcl.Transform(), req,
                               fcl.ContinuousCollisionResult()))
                 n += 1
+    if "--random" in argv:
+        rng = np.random.default_rng(int(argv[argv.index("--seed") + 1]) if "--seed" in argv else 1)
+        count = int(argv[argv.index("--random") + 1])
+        bounded = [g for g in GEOMS if g not in ("halfspace", "plane", "triangle")]
+        for a, b in itertools.product(bounded, bounded):
+            g1, g2 = GEOMS[a](), GEOMS[b]()
+            for k in range(count):
+                t = rng.uniform(-1.5, 1.5, 3)
+                if k % 3 == 0:
+                    t = np.round(t, 1)
+                tf = fcl.Transform(rng.normal(size=4), t) if k % 2 else fcl.Transform(t)
+                o1, o2 = fcl.CollisionObject(g1, tf), fcl.CollisionObject(g2, fcl.Transform())
+                for solver in (0, 1):
+                    req = fcl.CollisionRequest(gjk_solver_type=solver)
+                    ok &= run("%s %s random %d collide gjk=%d" % (a, b, k, solver),
+                              lambda: fcl.collide(o1, o2, req, fcl.CollisionResult()))
+                    for signed in (False, True):
+                        dreq = fcl.DistanceRequest(True, signed, solver)
+                        ok &= run("%s %s random %d %s gjk=%d" % (
+                            a, b, k, "sdist" if signed else "dist", solver),
+                            lambda: fcl.distance(o1, o2, dreq, fcl.DistanceResult()))
+                    n += 3
     print("%d queries: %s" % (n, "every query answered or refused" if ok else "SOME FAILED"))
     return 0 if ok else 1
 

@@ -191,6 +191,13 @@ class WhatFclCannotAnswer(unittest.TestCase):
             self.assertLessEqual(abs(d), 1e-6, (a, b, d))
             d, _ = dist(obj(a, (-1.25, 0, 0)), obj(b), True)
             self.assertAlmostEqual(d, 0.25, places=6)
+        # A mesh overlapping a Convex where the first contact FCL takes is 0 deep: its signed
+        # distance asserted a deeper one and aborted.
+        mesh, cube = M.fcl_mesh(*M.sphere(0.7, 12, 8)), fcl.Convex(CUBE_V, 6, CUBE_FLAT)
+        for solver in (0, 1):
+            d, res = dist(obj(mesh, (-0.9, -0.5, -0.8)), obj(cube), True, solver)
+            self.assertLessEqual(d, 0)
+            self.assertTrue(hits(obj(mesh, (-0.9, -0.5, -0.8)), obj(cube)))
         d, res = dist(obj(s), obj(fcl.Sphere(0.3)), True)
         self.assertEqual(d, -0.8)
         d, res = dist(obj(s, (0.1, 0, 0)), obj(fcl.Sphere(0.3)), True)
@@ -209,12 +216,13 @@ class WhatFclCannotAnswer(unittest.TestCase):
         self.assertEqual(len(res.nearest_points), 2)
 
     def test_every_pair_answers_or_raises(self):
-        """Every ordered pair of geometry types, overlapping, apart and exactly touching, both
-        solvers, collide / distance / signed distance: a number or UnsupportedQueryError, in a
-        child process (an abort or a hang there fails this test instead of the suite)."""
+        """Every ordered pair of geometry types, overlapping, apart and exactly touching, and at
+        20 random poses, both solvers, collide / distance / signed distance: a number or
+        UnsupportedQueryError, in a child process (an abort or a hang there fails this test
+        instead of the suite)."""
         script = os.path.join(HERE, "fcl_pair_sweep.py")
-        out = subprocess.run([sys.executable, script, "--quick"], capture_output=True,
-                             text=True, timeout=240)
+        out = subprocess.run([sys.executable, script, "--quick", "--random", "20"],
+                             capture_output=True, text=True, timeout=240)
         self.assertEqual(out.returncode, 0, out.stdout[-2000:] + out.stderr[-2000:])
         self.assertIn("every query answered or refused", out.stdout)
 
