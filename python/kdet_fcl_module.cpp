@@ -630,9 +630,12 @@ T attrValue(const py::handle& v, const std::string& name) {
   try {
     return py::cast<T>(v);
   } catch (const py::cast_error&) {
+    const bool too_big = std::is_integral<T>::value && !std::is_same<T, bool>::value &&
+                         py::isinstance<py::int_>(v);
     throw InvalidInputError(name + ": expected " +
                             (std::is_same<T, bool>::value ? "a bool"
-                             : std::is_floating_point<T>::value ? "a number" : "an integer") +
+                             : std::is_floating_point<T>::value ? "a number"
+                             : too_big ? "an integer below 2^63" : "an integer") +
                             ", got " + std::string(py::repr(v)));
   }
 }

@@ -162,6 +162,14 @@ class WhatFclCannotAnswer(unittest.TestCase):
             dist(obj(fcl.TriangleP([0, 0, 0], [1, 0, 0], [0, 1, 0])), obj(box))
         with self.assertRaises(kdet_fcl.InvalidInputError):  # FCL: a warning and "no collision"
             fcl.collide(obj(box), obj(box), fcl.CollisionRequest(num_max_contacts=0))
+        for request, msg in ((fcl.CollisionRequest(num_max_contacts=1.5), "an integer"),
+                             (fcl.CollisionRequest(num_max_contacts=10**30), "below 2"),
+                             (fcl.CollisionRequest(gjk_solver_type=2), r"\[0, 2\)"),
+                             (object(), "no attribute 'num_max_contacts'")):
+            with self.assertRaisesRegex(kdet_fcl.InvalidInputError, msg):
+                fcl.collide(obj(box), obj(box), request)
+        self.assertEqual(fcl.collide(obj(box), obj(box),
+                                     fcl.CollisionRequest(num_max_contacts=np.int64(3))), 1)
 
     def test_poses_must_be_rigid_and_finite(self):
         # FCL answers these without an error (a NaN pose collides with nothing).
