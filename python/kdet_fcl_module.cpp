@@ -1051,14 +1051,14 @@ bool managerCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void*
 bool managerDistanceCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data,
                              double& dist) {
   return static_cast<CallbackData*>(data)->call(o1, o2, [&dist](const py::object& r) {
-    py::sequence pair = py::reinterpret_borrow<py::sequence>(r);
-    if (!py::isinstance<py::sequence>(r) || py::len(pair) != 2)
+    if (!py::isinstance<py::sequence>(r) || py::isinstance<py::str>(r) || py::len(r) != 2)
       throw InvalidInputError("a distance callback returns (done, distance), not " +
-                              std::string(py::str(r)));
-    const double d = py::cast<double>(pair[1]);
+                              std::string(py::repr(r)));
+    const py::sequence pair = py::reinterpret_borrow<py::sequence>(r);
+    const double d = attrValue<double>(pair[1], "a distance callback's distance");
     if (std::isnan(d)) throw InvalidInputError("a distance callback returned a NaN distance");
     dist = d;
-    return py::cast<bool>(pair[0]);
+    return attrValue<bool>(pair[0], "a distance callback's done");
   });
 }
 

@@ -348,8 +348,9 @@ class ManagerDistances(unittest.TestCase):
             self.m1.distance(fcl.DistanceData(), boom)
         with self.assertRaises(kdet_fcl.InvalidInputError):
             self.m1.distance(fcl.DistanceData(), lambda o1, o2, data: True)
-        with self.assertRaises(kdet_fcl.InvalidInputError):
-            self.m1.distance(fcl.DistanceData(), lambda o1, o2, data: (False, float("nan")))
+        for bad in ((False, float("nan")), "ab", (False, "x"), (False, 1.0, 2.0)):
+            with self.assertRaises(kdet_fcl.InvalidInputError, msg=repr(bad)):
+                self.m1.distance(fcl.DistanceData(), lambda o1, o2, data: bad)
         with self.assertRaises(ValueError):
             self.m1.distance(fcl.DistanceData())
         seen = []
