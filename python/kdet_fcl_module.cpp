@@ -27,8 +27,6 @@
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/geometry/shape/triangle_p.h>
 #include <fcl/narrowphase/collision.h>
-#include <fcl/narrowphase/collision-inl.h>
-#include <fcl/narrowphase/distance-inl.h>
 #include <fcl/narrowphase/distance.h>
 #if FCL_HAVE_OCTOMAP
 #include <fcl/geometry/octree/octree.h>
@@ -583,11 +581,6 @@ void requireBuilt(const Geometry* g, const std::string& what) {
                               "by FCL: a model with no triangles; or an update not ended)");
 }
 
-/// Meshes held in MeshMode::KdetOnly refit FCL's BVH before FCL's own query reads it.
-void refitForFcl(const Geometry* g) {
-  if (auto* m = dynamic_cast<const Meshd*>(g))
-    if (m->mode() == MeshMode::KdetOnly) const_cast<Meshd*>(m)->refitFcl();
-}
 
 /// The cost sources of a result (octree pairs with enable_cost), as arrays; None for none.
 py::object costsOf(fcl::CollisionResultd& result) {
@@ -682,118 +675,31 @@ fcl::CollisionRequestd toRequest(const py::handle& r) {
       enumOf<fcl::GJKSolverType>(r, "gjk_solver_type", what, 2));
 }
 
-// ---- What FCL 0.7 cannot answer, refused before FCL sees it ----
-// Found by running collide, distance and signed distance on every ordered pair of python-fcl's
-// geometry types (overlapping, apart, coincident, exactly touching; both GJK solvers) and
-// continuous collision (benchmarks/results/python-compat/; python/tests/fcl_pair_sweep.py reruns
-// it). python-fcl forwards all of these and crashes, hangs or answers wrongly; here they raise
-// UnsupportedQueryError, or go to the solver or the path that answers them.
+// ---- What FCL 0.7 cannot answer: kdet_fcl::guardedCollide and guardedDistance ----
+// (include/kdet_fcl/fcl_guarded.h; the sweep that found it: benchmarks/results/python-compat/,
+// rerun by python/tests/fcl_pair_sweep.py). python-fcl forwards these and crashes, hangs or
+// answers wrongly; here they raise UnsupportedQueryError, or take the path that answers them.
 
-/// A query FCL 0.7 has no answer for (kdet_fcl.UnsupportedQueryError, a NotImplementedError).
-struct UnsupportedQuery : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-std::string nodeName(fcl::NODE_TYPE t) {
-  switch (t) {
-    case fcl::GEOM_BOX: return "Box";
-    case fcl::GEOM_SPHERE: return "Sphere";
-    case fcl::GEOM_ELLIPSOID: return "Ellipsoid";
-    case fcl::GEOM_CAPSULE: return "Capsule";
-    case fcl::GEOM_CONE: return "Cone";
-    case fcl::GEOM_CYLINDER: return "Cylinder";
-    case fcl::GEOM_CONVEX: return "Convex";
-    case fcl::GEOM_PLANE: return "Plane";
-    case fcl::GEOM_HALFSPACE: return "Halfspace";
-    case fcl::GEOM_TRIANGLE: return "TriangleP";
-    case fcl::GEOM_OCTREE: return "OcTree";
-    default: return t >= fcl::BV_AABB && t <= fcl::BV_KDOP24 ? "BVHModel" : "geometry";
-  }
-}
-
-bool unbounded(fcl::NODE_TYPE t) { return t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_PLANE; }
-
-std::string pairName(const Geometry* a, const Geometry* b) {
-  return nodeName(a->getNodeType()) + " and " + nodeName(b->getNodeType());
-}
-
-/// Whether FCL's table of the solver's functions has one for the pair (looked up as FCL does).
-template <class Table>
-bool inTable(const Table& table, const Geometry* a, const Geometry* b) {
-  const fcl::NODE_TYPE na = a->getNodeType(), nb = b->getNodeType();
-  if (a->getObjectType() == fcl::OT_GEOM && b->getObjectType() == fcl::OT_BVH) return table[nb][na];
-  return table[na][nb];
-}
-
-/// The solver a collide of a and b runs with, or UnsupportedQuery.
-fcl::GJKSolverType collideSolver(const Geometry* a, const Geometry* b, fcl::GJKSolverType gjk) {
-  const bool listed =
-      gjk == fcl::GST_LIBCCD
-          ? inTable(fcl::getCollisionFunctionLookTable<fcl::detail::GJKSolver_libccd<double>>()
-                        .collision_matrix, a, b)
-          : inTable(fcl::getCollisionFunctionLookTable<fcl::detail::GJKSolver_indep<double>>()
-                        .collision_matrix, a, b);
-  if (!listed)  // FCL prints a warning and answers "no collision"
-    throw UnsupportedQuery("FCL 0.7 has no collision test for " + pairName(a, b) +
-                           (a->getNodeType() == fcl::GEOM_TRIANGLE ||
-                                    b->getNodeType() == fcl::GEOM_TRIANGLE
-                                ? " (a TriangleP collides with nothing: use a one-triangle BVHModel)"
-                                : ""));
-  if (unbounded(a->getNodeType()) && unbounded(b->getNodeType()))
-    throw UnsupportedQuery("collide: FCL 0.7 answers " + pairName(a, b) +
-                           " wrongly (overlapping ones are reported apart when contacts are asked "
-                           "for)");
-  const fcl::NODE_TYPE na = a->getNodeType(), nb = b->getNodeType();
-  if ((na == fcl::GEOM_CONVEX && nb == fcl::GEOM_PLANE) ||
-      (na == fcl::GEOM_PLANE && nb == fcl::GEOM_CONVEX))
-    return fcl::GST_INDEP;  // libccd's Convex-Plane test crashes
-  return gjk;
-}
-
-/// Checks that FCL 0.7 has a distance for a and b that neither crashes nor answers wrongly.
-void checkDistance(const Geometry* a, const Geometry* b) {
-  // Either solver's table: they list the same pairs.
-  if (!inTable(fcl::getDistanceFunctionLookTable<fcl::detail::GJKSolver_indep<double>>()
-                   .distance_matrix, a, b))  // FCL prints a warning and answers DBL_MAX
-    throw UnsupportedQuery("FCL 0.7 has no distance for " + pairName(a, b));
-  if (unbounded(a->getNodeType()) || unbounded(b->getNodeType()))
-    throw UnsupportedQuery("distance: FCL 0.7 crashes on " + pairName(a, b) +
-                           " with GST_LIBCCD and answers wrongly with GST_INDEP");
-}
-
-/// FCL 0.7's answer, with its exceptions (such as "Error with configuration" from its signed
-/// distance of coincident cylinders) as UnsupportedQuery.
-template <class F>
-auto fromFcl(F f, const Geometry* a, const Geometry* b) {
-  try {
-    return f();
-  } catch (const kdet_fcl::Error&) {
-    throw;
-  } catch (const UnsupportedQuery&) {
-    throw;
-  } catch (const std::bad_alloc&) {
-    throw;  // MemoryError
-  } catch (const py::error_already_set&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw UnsupportedQuery("FCL 0.7 failed on " + pairName(a, b) + ": " + e.what());
-  }
-}
-
-/// One discrete collision of two geometries at poses: kdet_fcl::collide ("kdet": kDet decides mesh
-/// pairs) or FCL 0.7's fcl::collide ("fcl"), with the solver collideSolver picks.
+/// One discrete collision of two geometries at poses: kDet decides mesh pairs ("kdet") or FCL
+/// 0.7 answers every pair ("fcl"), both guarded.
 std::size_t collideAt(const Geometry* a, const fcl::Transform3d& ta, const Geometry* b,
-                      const fcl::Transform3d& tb, fcl::CollisionRequestd request,
+                      const fcl::Transform3d& tb, const fcl::CollisionRequestd& request,
                       fcl::CollisionResultd& result, const std::string& engine) {
   requireBuilt(a, "collide");
   requireBuilt(b, "collide");
-  request.gjk_solver_type = collideSolver(a, b, request.gjk_solver_type);
-  if (engine == "kdet")
-    return fromFcl([&] { return kdet_fcl::collide(a, ta, b, tb, request, result); }, a, b);
-  if (engine != "fcl") throw InvalidInputError("engine must be 'kdet' or 'fcl', not '" + engine + "'");
-  refitForFcl(a);
-  refitForFcl(b);
-  return fromFcl([&] { return fcl::collide(a, ta, b, tb, request, result); }, a, b);
+  if (engine != "kdet" && engine != "fcl")
+    throw InvalidInputError("engine must be 'kdet' or 'fcl', not '" + engine + "'");
+  return guardedCollide(a, ta, b, tb, request, result,
+                        engine == "kdet" ? CollideEngine::Kdet : CollideEngine::Fcl);
+}
+
+/// One guarded distance of two geometries at poses.
+double distanceAt(const Geometry* a, const fcl::Transform3d& ta, const Geometry* b,
+                  const fcl::Transform3d& tb, const fcl::DistanceRequestd& request,
+                  fcl::DistanceResultd& result) {
+  requireBuilt(a, "distance");
+  requireBuilt(b, "distance");
+  return guardedDistance(a, ta, b, tb, request, result);
 }
 
 /// The core of fcl.py's collide and fcl_collide.
@@ -812,86 +718,6 @@ py::tuple selfCollideCore(const ObjectCore& a, const py::object& py_request) {
   requireBuilt(a.geometry.get(), "self_collide");
   const std::size_t n = kdet_fcl::selfCollide(a.object.get(), request, result);
   return contactsOf(result, a.geometry.get(), n);
-}
-
-/// The signed distance of two spheres, in closed form: FCL 0.7's libccd path hangs when their
-/// centres (nearly) coincide (and its EPA answers others to about 1e-6). The nearest points are on
-/// the line of the centres, in world coordinates as FCL gives them; coincident centres take +x.
-double sphereSphereSigned(const fcl::Sphered& s1, const fcl::Transform3d& t1,
-                          const fcl::Sphered& s2, const fcl::Transform3d& t2,
-                          fcl::DistanceResultd& result) {
-  const fcl::Vector3d c1 = t1.translation(), c2 = t2.translation();
-  const double len = (c2 - c1).norm();
-  const fcl::Vector3d u = len > 0 ? fcl::Vector3d((c2 - c1) / len) : fcl::Vector3d::UnitX();
-  const double d = len - s1.radius - s2.radius;
-  result.update(d, &s1, &s2, fcl::DistanceResultd::NONE, fcl::DistanceResultd::NONE,
-                c1 + s1.radius * u, c2 - s2.radius * u);
-  return d;
-}
-
-/// One distance of two geometries at poses, FCL 0.7's where it answers; FCL's conventions: -1
-/// (unsigned, shapes) or 0 (meshes) for objects in collision, nearest points in world coordinates.
-/// - Unsigned distances run with GST_INDEP: libccd's GJK aborts the process on exactly touching
-///   pairs (Sphere-Ellipsoid, Capsule-Cone, ...; its assertions are on in Debian's build), and
-///   python-fcl never passed the solver to distance (it landed in rel_err).
-/// - A signed distance of objects that do not collide is their unsigned distance; of objects
-///   that collide, FCL's signed distance (libccd; GST_INDEP's aborts on most pairs), unless the
-///   deepest contact is within 1e-9 of their size (touching): FCL aborts there too, and the
-///   answer is 0 at the contact point (0 with NaN nearest points where FCL's collision test finds
-///   them apart and its GJK touching). A mesh or octree with a shape: minus the deepest contact's
-///   penetration depth (FCL's rule, on all contacts). Two spheres' signed distance is in closed
-///   form (FCL's hangs on coincident centres).
-double distanceAt(const Geometry* a, const fcl::Transform3d& ta, const Geometry* b,
-                  const fcl::Transform3d& tb, fcl::DistanceRequestd request,
-                  fcl::DistanceResultd& result) {
-  requireBuilt(a, "distance");
-  requireBuilt(b, "distance");
-  checkDistance(a, b);
-  const bool is_signed = request.enable_signed_distance;
-  request.enable_signed_distance = false;
-  request.gjk_solver_type = fcl::GST_INDEP;
-  // FCL's distance of two meshes has no sign (0 where they intersect): the unsigned one.
-  if (!is_signed || (a->getObjectType() == fcl::OT_BVH && b->getObjectType() == fcl::OT_BVH))
-    return fromFcl([&] { return kdet_fcl::distance(a, ta, b, tb, request, result); }, a, b);
-  if (a->getNodeType() == fcl::GEOM_SPHERE && b->getNodeType() == fcl::GEOM_SPHERE)
-    return sphereSphereSigned(static_cast<const fcl::Sphered&>(*a), ta,
-                              static_cast<const fcl::Sphered&>(*b), tb, result);
-  fcl::CollisionRequestd crequest(std::numeric_limits<int>::max(), true);
-  crequest.gjk_solver_type = collideSolver(a, b, fcl::GST_LIBCCD);
-  fcl::CollisionResultd contacts;
-  if (fromFcl([&] { return kdet_fcl::collide(a, ta, b, tb, crequest, contacts); }, a, b) == 0) {
-    const double d =
-        fromFcl([&] { return kdet_fcl::distance(a, ta, b, tb, request, result); }, a, b);
-    if (d >= 0) return d;
-    // The collision test finds them apart, GST_INDEP's GJK in contact: they touch within FCL's
-    // tolerance (about 1e-6). The distance is 0; there are no nearest points to give.
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    result = fcl::DistanceResultd();
-    result.update(0.0, a, b, fcl::DistanceResultd::NONE, fcl::DistanceResultd::NONE,
-                  fcl::Vector3d::Constant(nan), fcl::Vector3d::Constant(nan));
-    return 0.0;
-  }
-  std::size_t deepest = 0;
-  for (std::size_t i = 1; i < contacts.numContacts(); ++i)
-    if (contacts.getContact(i).penetration_depth > contacts.getContact(deepest).penetration_depth)
-      deepest = i;
-  const fcl::Contactd& contact = contacts.getContact(deepest);
-  const double size = std::max(a->aabb_radius, b->aabb_radius);
-  const fcl::Vector3d p = contact.pos;
-  if (!(contact.penetration_depth > 1e-9 * size)) {
-    result.update(0.0, a, b, fcl::DistanceResultd::NONE, fcl::DistanceResultd::NONE, p, p);
-    return 0.0;
-  }
-  if (a->getObjectType() != fcl::OT_GEOM || b->getObjectType() != fcl::OT_GEOM) {
-    // A mesh or an octree with a shape: FCL's own rule (minus the penetration depth of a contact,
-    // both nearest points at it), which FCL computes from one contact and asserts it deeper than
-    // 0 (an abort where it is not); here from the deepest contact.
-    result.update(-contact.penetration_depth, a, b, contact.b1, contact.b2, p, p);
-    return -contact.penetration_depth;
-  }
-  request.enable_signed_distance = true;
-  request.gjk_solver_type = fcl::GST_LIBCCD;
-  return fromFcl([&] { return kdet_fcl::distance(a, ta, b, tb, request, result); }, a, b);
 }
 
 /// The core of fcl.py's distance.
@@ -961,10 +787,10 @@ py::tuple continuousCore(const ObjectCore& a, const py::object& r1, const py::ob
   if (!(std::isfinite(toc_err) && toc_err > 0 && toc_err <= 1))
     throw InvalidInputError("ContinuousCollisionRequest.toc_err must be in (0, 1]");
   if (motion == fcl::CCDM_SCREW || motion == fcl::CCDM_SPLINE)
-    throw UnsupportedQuery("continuousCollide: only CCDM_TRANS and CCDM_LINEAR motions are "
+    throw UnsupportedQueryError("continuousCollide: only CCDM_TRANS and CCDM_LINEAR motions are "
                            "supported (FCL 0.7's screw and spline motions miss contacts)");
   if (solver == fcl::CCDC_RAY_SHOOTING || solver == fcl::CCDC_POLYNOMIAL_SOLVER)
-    throw UnsupportedQuery("continuousCollide: only CCDC_NAIVE and CCDC_CONSERVATIVE_ADVANCEMENT "
+    throw UnsupportedQueryError("continuousCollide: only CCDC_NAIVE and CCDC_CONSERVATIVE_ADVANCEMENT "
                            "are supported (FCL 0.7 implements neither of the others)");
   const Geometry* ga = a.geometry.get();
   const Geometry* gb = b.geometry.get();
@@ -991,7 +817,7 @@ py::tuple continuousCore(const ObjectCore& a, const py::object& r1, const py::ob
   // Conservative advancement.
   const double speed = ma.speedBound(reachOf(ga)) + mb.speedBound(reachOf(gb));
   if (!std::isfinite(speed))
-    throw UnsupportedQuery("continuousCollide (CCDC_CONSERVATIVE_ADVANCEMENT): an unbounded "
+    throw UnsupportedQueryError("continuousCollide (CCDC_CONSERVATIVE_ADVANCEMENT): an unbounded "
                            "geometry cannot turn; use CCDM_TRANS or CCDC_NAIVE");
   fcl::DistanceRequestd request;
   request.gjk_solver_type = gjk;
@@ -1402,10 +1228,10 @@ PYBIND11_MODULE(_kdet_fcl, m) {
       PyErr_SetString(e_unavailable, e.what());
     } catch (const CudaError& e) {
       PyErr_SetString(e_cuda, e.what());
+    } catch (const UnsupportedQueryError& e) {
+      PyErr_SetString(e_unsupported, e.what());
     } catch (const Error& e) {
       PyErr_SetString(e_error, e.what());
-    } catch (const UnsupportedQuery& e) {
-      PyErr_SetString(e_unsupported, e.what());
     }
   });
 

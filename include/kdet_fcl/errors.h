@@ -40,4 +40,11 @@ class CudaError : public Error {
   using Error::Error;
 };
 
+/// A query FCL 0.7 cannot answer: it has no test for the pair, or it crashes, hangs or answers
+/// wrongly there (kdet_fcl::guardedCollide and guardedDistance, fcl_guarded.h).
+class UnsupportedQueryError : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace kdet_fcl

@@ -19,5 +19,6 @@
 #include "kdet_fcl/triangle_mesh.h"
 #include "kdet_fcl/vec3.h"
 #include "kdet_fcl/fcl_collide.h"
+#include "kdet_fcl/fcl_guarded.h"
 #include "kdet_fcl/fcl_mesh.h"
 #include "kdet_fcl/collision_manager.h"

@@ -663,6 +663,21 @@ std::size_t cacheSize() {
   template void notifyDeformed(const fcl::CollisionGeometry<S>*);                                \
   template void forget(const fcl::CollisionGeometry<S>*);
 
+namespace detail {
+
+void prepareFclQuery(const fcl::CollisionGeometryd* a, const fcl::Transform3d& ta,
+                     const fcl::CollisionGeometryd* b, const fcl::Transform3d& tb,
+                     const char* what) {
+  if (a == nullptr || b == nullptr)
+    throw InvalidInputError(std::string("kdet_fcl::") + what + ": null geometry");
+  requireFinite(ta, what);
+  requireFinite(tb, what);
+  prepareForFcl(a);
+  prepareForFcl(b);
+}
+
+}  // namespace detail
+
 KDET_FCL_INSTANTIATE(float)
 KDET_FCL_INSTANTIATE(double)
 #undef KDET_FCL_INSTANTIATE
