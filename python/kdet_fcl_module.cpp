@@ -424,6 +424,13 @@ bool checkBvh(int code) {
   }
 }
 
+/// An FCL vector as a NumPy array of 3 numbers.
+py::array_t<double> vectorArray(const fcl::Vector3d& v) {
+  py::array_t<double> a(3);
+  for (int j = 0; j < 3; ++j) a.mutable_at(j) = v[j];
+  return a;
+}
+
 fcl::Vector3d toVec3(const py::handle& p, const std::string& what) {
   auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(p);
   if (!a || a.size() != 3) throw InvalidInputError(what + ": expected 3 numbers");
@@ -729,11 +736,9 @@ py::tuple distanceCore(const ObjectCore& a, const ObjectCore& b, const py::objec
   fcl::DistanceResultd result;
   const double d = distanceAt(a.geometry.get(), a.object->getTransform(), b.geometry.get(),
                               b.object->getTransform(), request, result);
-  py::array_t<double> p0(3), p1(3);
-  for (int j = 0; j < 3; ++j)
-    p0.mutable_at(j) = result.nearest_points[0][j], p1.mutable_at(j) = result.nearest_points[1][j];
   const bool swapped = result.o1 != a.geometry.get();
-  return py::make_tuple(d, result.min_distance, p0, p1, result.b1, result.b2, swapped);
+  return py::make_tuple(d, result.min_distance, vectorArray(result.nearest_points[0]),
+                        vectorArray(result.nearest_points[1]), result.b1, result.b2, swapped);
 }
 
 /// A rigid motion from a start pose to an end pose: the translation linear in t, the rotation
@@ -863,6 +868,15 @@ struct CallbackData {
   void raise() {
     if (error) std::rethrow_exception(error);
   }
+
+  /// Runs a manager traversal `run(&data)` with this callback and data, then raises what the
+  /// callback raised.
+  template <class Run>
+  static void traverse(const py::object& callback, const py::object& cdata, Run run) {
+    CallbackData d{callback, cdata, nullptr};
+    run(&d);
+    d.raise();
+  }
 };
 
 
@@ -923,9 +937,7 @@ void bindFclCore(py::module_& m) {
       .def("getObjectType", [](const Geometry& g) { return int(g.getObjectType()); })
       .def("computeLocalAABB", &Geometry::computeLocalAABB)
       .def_property_readonly("aabb_center", [](const Geometry& g) {
-        py::array_t<double> c(3);
-        for (int j = 0; j < 3; ++j) c.mutable_at(j) = g.aabb_center[j];
-        return c;
+        return vectorArray(g.aabb_center);
       });
 
   py::class_<Meshd, Geometry, std::shared_ptr<Meshd>>(m, "BVHModel",
@@ -994,11 +1006,7 @@ void bindFclCore(py::module_& m) {
              sized("Box", {x, y, z});
              return std::make_shared<fcl::Boxd>(x, y, z);
            }), py::arg("x"), py::arg("y"), py::arg("z"))
-      .def_property_readonly("side", [](const fcl::Boxd& b) {
-        py::array_t<double> s(3);
-        for (int j = 0; j < 3; ++j) s.mutable_at(j) = b.side[j];
-        return s;
-      });
+      .def_property_readonly("side", [](const fcl::Boxd& b) { return vectorArray(b.side); });
   py::class_<fcl::Sphered, Geometry, std::shared_ptr<fcl::Sphered>>(m, "Sphere")
       .def(py::init([sized](double r) {
              sized("Sphere", {r});
@@ -1032,20 +1040,15 @@ void bindFclCore(py::module_& m) {
       .def_readonly("radius", &fcl::Coned::radius)
       .def_readonly("lz", &fcl::Coned::lz);
 
-  auto vec3Array = [](const fcl::Vector3d& v) {
-    py::array_t<double> a(3);
-    for (int j = 0; j < 3; ++j) a.mutable_at(j) = v[j];
-    return a;
-  };
   py::class_<fcl::TrianglePd, Geometry, std::shared_ptr<fcl::TrianglePd>>(m, "TriangleP")
       .def(py::init([](const py::object& a, const py::object& b, const py::object& c) {
              return std::make_shared<fcl::TrianglePd>(finiteVec3(a, "TriangleP a"),
                                                       finiteVec3(b, "TriangleP b"),
                                                       finiteVec3(c, "TriangleP c"));
            }), py::arg("a"), py::arg("b"), py::arg("c"))
-      .def_property_readonly("a", [vec3Array](const fcl::TrianglePd& t) { return vec3Array(t.a); })
-      .def_property_readonly("b", [vec3Array](const fcl::TrianglePd& t) { return vec3Array(t.b); })
-      .def_property_readonly("c", [vec3Array](const fcl::TrianglePd& t) { return vec3Array(t.c); });
+      .def_property_readonly("a", [](const fcl::TrianglePd& t) { return vectorArray(t.a); })
+      .def_property_readonly("b", [](const fcl::TrianglePd& t) { return vectorArray(t.b); })
+      .def_property_readonly("c", [](const fcl::TrianglePd& t) { return vectorArray(t.c); });
   py::class_<fcl::Convexd, Geometry, std::shared_ptr<fcl::Convexd>>(m, "Convex",
       "A convex polytope: vertices (n, 3) and faces encoded as python-fcl's (and FCL's): for each "
       "face its vertex count, then its vertex indices, counter-clockwise seen from outside.")
@@ -1057,14 +1060,14 @@ void bindFclCore(py::module_& m) {
              const auto nd = planeOf(n, d, "Halfspace");
              return std::make_shared<fcl::Halfspaced>(nd.first, nd.second);
            }), py::arg("n"), py::arg("d"))
-      .def_property_readonly("n", [vec3Array](const fcl::Halfspaced& h) { return vec3Array(h.n); })
+      .def_property_readonly("n", [](const fcl::Halfspaced& h) { return vectorArray(h.n); })
       .def_readonly("d", &fcl::Halfspaced::d);
   py::class_<fcl::Planed, Geometry, std::shared_ptr<fcl::Planed>>(m, "Plane")
       .def(py::init([](const py::object& n, double d) {
              const auto nd = planeOf(n, d, "Plane");
              return std::make_shared<fcl::Planed>(nd.first, nd.second);
            }), py::arg("n"), py::arg("d"))
-      .def_property_readonly("n", [vec3Array](const fcl::Planed& h) { return vec3Array(h.n); })
+      .def_property_readonly("n", [](const fcl::Planed& h) { return vectorArray(h.n); })
       .def_readonly("d", &fcl::Planed::d);
 #if FCL_HAVE_OCTOMAP
   py::class_<fcl::OcTreed, Geometry, std::shared_ptr<fcl::OcTreed>>(m, "OcTree",
@@ -1099,10 +1102,7 @@ void bindFclCore(py::module_& m) {
         return R;
       })
       .def("_translation", [](const ObjectCore& self) {
-        py::array_t<double> t(3);
-        const fcl::Vector3d& v = self.object->getTranslation();
-        for (int j = 0; j < 3; ++j) t.mutable_at(j) = v[j];
-        return t;
+        return vectorArray(self.object->getTranslation());
       })
       .def("getObjectType", [](const ObjectCore& self) { return int(self.object->getObjectType()); })
       .def("getNodeType", [](const ObjectCore& self) { return int(self.object->getNodeType()); })
@@ -1135,39 +1135,37 @@ void bindFclCore(py::module_& m) {
       .def("clear", [](ManagerCore& self) { self.manager.clear(); })
       .def("empty", [](const ManagerCore& self) { return self.manager.empty(); })
       .def("size", [](const ManagerCore& self) { return self.manager.size(); })
-      .def("_collide", [](ManagerCore& self, const py::object& cdata, const py::object& callback) {
-        CallbackData d{callback, cdata, nullptr};
-        self.manager.collide(&d, managerCallback);
-        d.raise();
+      .def("_collide", [](ManagerCore& self, const py::object& cdata, const py::object& cb) {
+        CallbackData::traverse(cb, cdata, [&](void* d) { self.manager.collide(d, managerCallback); });
       })
       .def("_collide_object", [](ManagerCore& self, ObjectCore& o, const py::object& cdata,
-                                 const py::object& callback) {
-        CallbackData d{callback, cdata, nullptr};
-        self.manager.collide(o.object.get(), &d, managerCallback);
-        d.raise();
+                                 const py::object& cb) {
+        CallbackData::traverse(cb, cdata, [&](void* d) {
+          self.manager.collide(o.object.get(), d, managerCallback);
+        });
       })
       .def("_collide_manager", [](ManagerCore& self, ManagerCore& other, const py::object& cdata,
-                                  const py::object& callback) {
-        CallbackData d{callback, cdata, nullptr};
-        self.manager.collide(&other.manager, &d, managerCallback);
-        d.raise();
+                                  const py::object& cb) {
+        CallbackData::traverse(cb, cdata, [&](void* d) {
+          self.manager.collide(&other.manager, d, managerCallback);
+        });
       })
-      .def("_distance", [](ManagerCore& self, const py::object& cdata, const py::object& callback) {
-        CallbackData d{callback, cdata, nullptr};
-        self.manager.distance(&d, managerDistanceCallback);
-        d.raise();
+      .def("_distance", [](ManagerCore& self, const py::object& cdata, const py::object& cb) {
+        CallbackData::traverse(cb, cdata, [&](void* d) {
+          self.manager.distance(d, managerDistanceCallback);
+        });
       })
       .def("_distance_object", [](ManagerCore& self, ObjectCore& o, const py::object& cdata,
-                                  const py::object& callback) {
-        CallbackData d{callback, cdata, nullptr};
-        self.manager.distance(o.object.get(), &d, managerDistanceCallback);
-        d.raise();
+                                  const py::object& cb) {
+        CallbackData::traverse(cb, cdata, [&](void* d) {
+          self.manager.distance(o.object.get(), d, managerDistanceCallback);
+        });
       })
       .def("_distance_manager", [](ManagerCore& self, ManagerCore& other, const py::object& cdata,
-                                   const py::object& callback) {
-        CallbackData d{callback, cdata, nullptr};
-        self.manager.distance(&other.manager, &d, managerDistanceCallback);
-        d.raise();
+                                   const py::object& cb) {
+        CallbackData::traverse(cb, cdata, [&](void* d) {
+          self.manager.distance(&other.manager, d, managerDistanceCallback);
+        });
       });
   // The tree's tuning fields (python-fcl's properties of the same names).
 #define KDET_FCL_MANAGER_FIELD(name) \
