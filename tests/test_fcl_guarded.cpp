@@ -166,4 +166,34 @@ TEST(FclGuarded, BadInputThrows) {
                kdet_fcl::InvalidInputError);
 }
 
+TEST(FclGuarded, ModelsThatAreNotBuiltThrowInsteadOfReachingFcl) {
+  // FCL's traversals read the hierarchy of a model between beginModel and endModel (or an empty
+  // one, whose endModel FCL refuses) and crashed in kdet_fcl::distance, in kdet_fcl::collide with
+  // a shape, and in the guarded calls.
+  const fcl::Boxd box(1, 1, 1);
+  fcl::BVHModel<fcl::OBBRSSd> empty, open;
+  empty.beginModel();
+  empty.endModel();  // refused: FCL prints an error
+  open.beginModel();
+  open.addTriangle(fcl::Vector3d(0, 0, 0), fcl::Vector3d(1, 0, 0), fcl::Vector3d(0, 1, 0));
+  fcl::CollisionRequestd request;
+  fcl::DistanceRequestd drequest;
+  for (const fcl::CollisionGeometryd* m : {static_cast<const fcl::CollisionGeometryd*>(&empty),
+                                           static_cast<const fcl::CollisionGeometryd*>(&open)}) {
+    fcl::CollisionResultd cr;
+    fcl::DistanceResultd dr;
+    EXPECT_THROW(kdet_fcl::distance(m, at(0), &box, at(0), drequest, dr),
+                 kdet_fcl::InvalidInputError);
+    EXPECT_THROW(guardedDistance(&box, at(0), m, at(0), drequest, dr), kdet_fcl::InvalidInputError);
+    EXPECT_THROW(guardedCollide(m, at(0), &box, at(0), request, cr, kdet_fcl::CollideEngine::Fcl),
+                 kdet_fcl::InvalidInputError);
+  }
+  fcl::CollisionResultd cr;
+  EXPECT_THROW(kdet_fcl::collide(&open, at(0), &box, at(0), request, cr),
+               kdet_fcl::InvalidInputError);
+  // An empty model meets nothing on the kDet path (kdet_fcl::collide's contract).
+  EXPECT_EQ(kdet_fcl::collide(&empty, at(0), &box, at(0), request, cr), 0u);
+  EXPECT_EQ(guardedCollide(&empty, at(0), &box, at(0), request, cr), 0u);
+}
+
 }  // namespace

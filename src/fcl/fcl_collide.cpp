@@ -268,11 +268,22 @@ bool samePose(const Transform<S>& a, const Transform<S>& b) {
   return std::memcmp(&a, &b, sizeof(Transform<S>)) == 0;
 }
 
-/// A kdet_fcl::Mesh in KdetOnly mode gets FCL's BVH refitted before FCL sees it.
+/// Before a query goes to FCL: a BVHModel must be built (FCL's traversals read its hierarchy and
+/// crash on one between beginModel and endModel, inside an update, or empty, which endModel
+/// refuses), and a kdet_fcl::Mesh in KdetOnly mode gets FCL's BVH refitted.
 template <class S>
-void prepareForFcl(const fcl::CollisionGeometry<S>* g) {
+void prepareForFcl(const fcl::CollisionGeometry<S>* g, const char* what) {
   FclMeshView<S> v;
-  if (!detail::viewOf(g, v) || v.kdet_mesh == nullptr) return;
+  if (!detail::viewOf(g, v)) return;
+  if (v.build_state != fcl::BVH_BUILD_STATE_PROCESSED &&
+      v.build_state != fcl::BVH_BUILD_STATE_UPDATED)
+    throw InvalidInputError(
+        std::string("kdet_fcl::") + what +
+        (v.num_vertices == 0 && v.num_tris == 0
+             ? ": an empty BVHModel (no triangles: FCL's endModel refuses it)"
+             : ": a BVHModel that is not built (call endModel, endUpdateModel or "
+               "endReplaceModel before querying it)"));
+  if (v.kdet_mesh == nullptr) return;
   if (!detail::MeshAccess<S>::fclStale(*v.kdet_mesh)) return;
   std::lock_guard<std::mutex> lock(detail::MeshAccess<S>::entry(*v.kdet_mesh)->mutex);
   // The Mesh is the caller's (non-const) object; refitting changes only FCL's BVs.
@@ -496,8 +507,8 @@ std::size_t collide(const fcl::CollisionGeometry<S>* o1, const fcl::Transform3<S
   // traversal would read its missing hierarchy and crash.
   auto empty = [](const FclMeshView<S>& v) { return v.num_vertices == 0 && v.num_tris == 0; };
   if ((bvh1 && empty(v1)) || (bvh2 && empty(v2))) return result.numContacts();
-  prepareForFcl(o1);
-  prepareForFcl(o2);
+  prepareForFcl(o1, "collide");
+  prepareForFcl(o2, "collide");
   return fcl::collide(o1, tf1, o2, tf2, request, result);
 }
 
@@ -551,8 +562,8 @@ S distance(const fcl::CollisionGeometry<S>* o1, const fcl::Transform3<S>& tf1,
   if (o1 == nullptr || o2 == nullptr) throw InvalidInputError("kdet_fcl::distance: null geometry");
   requireFinite(tf1, "distance");
   requireFinite(tf2, "distance");
-  prepareForFcl(o1);
-  prepareForFcl(o2);
+  prepareForFcl(o1, "distance");
+  prepareForFcl(o2, "distance");
   return fcl::distance(o1, tf1, o2, tf2, request, result);
 }
 
@@ -672,8 +683,8 @@ void prepareFclQuery(const fcl::CollisionGeometryd* a, const fcl::Transform3d& t
     throw InvalidInputError(std::string("kdet_fcl::") + what + ": null geometry");
   requireFinite(ta, what);
   requireFinite(tb, what);
-  prepareForFcl(a);
-  prepareForFcl(b);
+  prepareForFcl(a, what);
+  prepareForFcl(b, what);
 }
 
 }  // namespace detail

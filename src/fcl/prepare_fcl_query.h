@@ -6,8 +6,9 @@
 namespace kdet_fcl {
 namespace detail {
 
-/// Throws InvalidInputError for a null geometry or a non-finite pose; refits FCL's BVH of a
-/// kdet_fcl::Mesh kept for kDet only (MeshMode::KdetOnly) that changed since FCL last saw it.
+/// Throws InvalidInputError for a null geometry, a non-finite pose or a BVHModel that is not
+/// built (or empty); refits FCL's BVH of a kdet_fcl::Mesh kept for kDet only
+/// (MeshMode::KdetOnly) that changed since FCL last saw it.
 void prepareFclQuery(const fcl::CollisionGeometryd* a, const fcl::Transform3d& ta,
                      const fcl::CollisionGeometryd* b, const fcl::Transform3d& tb,
                      const char* what);
