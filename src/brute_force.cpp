@@ -16,8 +16,8 @@ std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
                                                     const TriangleMesh<S>& b,
                                                     const Transform<S>& pose_b,
                                                     Predicate predicate) {
-  a.validate(false, "bruteForceIntersectMeshes: first mesh");
-  b.validate(false, "bruteForceIntersectMeshes: second mesh");
+  a.validateForQueries(false, "bruteForceIntersectMeshes: first mesh");
+  b.validateForQueries(false, "bruteForceIntersectMeshes: second mesh");
   validatePose(pose_a, "bruteForceIntersectMeshes: first pose");
   validatePose(pose_b, "bruteForceIntersectMeshes: second pose");
   const detail::RelativePose rp = detail::relativePose(pose_a, pose_b);
@@ -39,7 +39,7 @@ std::vector<TrianglePair> bruteForceIntersectMeshes(const TriangleMesh<S>& a,
 
 template <class S>
 std::vector<TrianglePair> bruteForceIntersectSelf(const TriangleMesh<S>& m, Predicate predicate) {
-  m.validate(false, "bruteForceIntersectSelf");
+  m.validateForQueries(false, "bruteForceIntersectSelf");
   const auto& v = m.vertices;
   std::vector<TrianglePair> out;
   for (std::size_t i = 0; i < m.triangles.size(); ++i) {

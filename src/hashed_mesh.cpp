@@ -16,6 +16,7 @@
 #endif
 
 #include "commit_copy.h"
+#include "coordinate_range.h"
 #include "cpu/dma_passes.h"
 #include "cpu/hierarchical_hash.h"
 #include "cpu/parallel.h"
@@ -199,24 +200,31 @@ bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int 
   return mergedBounds(part.data(), part.size(), out);
 }
 
-/// InvalidInputError naming the first non-finite coordinate of `v`, prefixed by `what`
+/// InvalidInputError naming the first non-finite coordinate of `v`, or the vertex that puts its
+/// largest magnitude outside the exact range (TriangleMesh::validate), prefixed by `what`
 /// (updateVertices, commitVertices).
 template <class S>
-[[noreturn]] void throwNonFinite(const std::vector<Vec3<S>>& v, const char* what) {
+[[noreturn]] void throwBadVertices(const std::vector<Vec3<S>>& v, const char* what) {
   TriangleMesh<S> probe;  // the error path: the message names the first bad vertex
   probe.vertices = v;
-  probe.validate(false, what);
+  probe.validateForQueries(false, what);
   throw InvalidInputError(std::string(what) + ": a non-finite coordinate");
 }
 
+/// Whether finite bounds `b` keep the mesh's largest coordinate magnitude in the exact range
+/// (detail::inExactRange: what TriangleMesh::validate requires, read off the bounds for free).
+bool boundsInRange(const detail::Aabb<double>& b) {
+  return detail::inExactRange(detail::largestMagnitude(b));
+}
+
 /// The bounds of the new positions `v` (finiteBounds in t threads, vertexThreads' count,
-/// demoting each line where `demote`), or throwNonFinite's error.
+/// demoting each line where `demote`), or throwBadVertices' error.
 template <class S>
 detail::Aabb<double> checkedBounds(const std::vector<Vec3<S>>& v, int t, const char* what,
                                    bool demote) {
   detail::Aabb<double> b;
-  if (finiteBounds(v, &b, t, demote)) return b;
-  throwNonFinite(v, what);
+  if (finiteBounds(v, &b, t, demote) && boundsInRange(b)) return b;
+  throwBadVertices(v, what);
 }
 
 /// Copies src[lo, hi) to dst + lo: by non-temporal stores where `stream` (cpu::streamCopy, into a
@@ -354,7 +362,7 @@ struct HashedMesh<S>::Lazy {
 template <class S>
 HashedMesh<S>::HashedMesh(TriangleMesh<S> mesh, const Transform<S>& pose, int threads)
     : mesh_(std::move(mesh)), threads_(threads) {
-  mesh_.validate(false, "HashedMesh");
+  mesh_.validateForQueries(false, "HashedMesh");
   setPose(pose);
   hash_ = std::make_unique<detail::HierarchicalHash<S>>();
   lazy_ = std::make_unique<Lazy>();
@@ -474,9 +482,9 @@ void HashedMesh<S>::commitVertices() {
   detail::Aabb<double> b;
   if (!copy) {
     b = checkedBounds(write_buffer_, t, "commitVertices", demote);
-  } else if (!detail::checkedPieces(write_buffer_, t, demote, *copy, &b)) {
+  } else if (!detail::checkedPieces(write_buffer_, t, demote, *copy, &b) || !boundsInRange(b)) {
     copy->finish(false, 0);
-    throwNonFinite(write_buffer_, "commitVertices");
+    throwBadVertices(write_buffer_, "commitVertices");
   }
   mesh_.vertices.swap(write_buffer_);
   std::swap(host_pin_, write_pin_);
@@ -486,7 +494,7 @@ void HashedMesh<S>::commitVertices() {
 
 template <class S>
 void HashedMesh<S>::setMesh(TriangleMesh<S> mesh) {
-  mesh.validate(false, "setMesh");
+  mesh.validateForQueries(false, "setMesh");
   host_pin_.reset();  // the vertex buffers are replaced
   write_pin_.reset();
   std::vector<Vec3<S>>().swap(write_buffer_);

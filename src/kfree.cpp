@@ -55,7 +55,7 @@ KFreeStats summarize(std::vector<std::uint32_t>&& counts, const std::vector<std:
 
 template <class S>
 KFreeStats analyzeKFree(const TriangleMesh<S>& mesh, const KFreeOptions& options) {
-  mesh.validate(false, "analyzeKFree");
+  mesh.validateForQueries(false, "analyzeKFree");
   detail::HierarchicalHash<S> h;
   h.build(mesh, options.threads);
   const std::size_t n = mesh.triangles.size();
@@ -85,7 +85,7 @@ KFreeStats analyzeKFree(const TriangleMesh<S>& mesh, const KFreeOptions& options
 
 template <class S>
 KFreeStats analyzeKFreeBruteForce(const TriangleMesh<S>& mesh, const KFreeOptions& options) {
-  mesh.validate(false, "analyzeKFreeBruteForce");
+  mesh.validateForQueries(false, "analyzeKFreeBruteForce");
   detail::HierarchicalHash<S> h;  // only for the diameters and the height
   h.build(mesh, options.threads);
   const std::size_t n = mesh.triangles.size();

@@ -9,6 +9,7 @@
 #include <random>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "kdet_fcl/detail/pose.h"
@@ -96,6 +97,43 @@ inline BaseScene baseScene() {
   // Parallel to the sheet one grid step above: no contact.
   s.b.addTriangle({-1.25, 1.0, 1.0}, {-1.0, 1.0, 1.0}, {-1.0, 1.25, 1.0});
   return s;
+}
+
+/// The scale ladder (docs/numerics.md section 1): the base scene with its sphere's coordinates
+/// rounded to multiples of 2^-20 (the hand-placed parts already are), scaled by 2^k. Its largest
+/// coordinate magnitude is 1.75 and every coordinate is a multiple of 2^-20, so for k in
+/// [kLadderLow<S>, kLadderHigh<S>] the scaling is exact in S and, in double, keeps every
+/// coordinate a multiple of 2^-300 of magnitude at most 2^330: the predicates are exact on every
+/// rung, and the pair sets cannot depend on k. The double rungs' ends put the largest magnitude at
+/// 1.75 * 2^-247 and 1.75 * 2^329, next to the ends of the range a mesh may have
+/// (TriangleMesh::validateForQueries: [2^-247, 2^330]).
+template <class S>
+constexpr int kLadderLow = std::is_same<S, float>::value ? -129 : -247;
+template <class S>
+constexpr int kLadderHigh = std::is_same<S, float>::value ? 126 : 329;
+
+/// The ladder's rungs: every 8th k from kLadderLow and both ends.
+template <class S>
+std::vector<int> ladderRungs() {
+  std::vector<int> k;
+  for (int e = kLadderLow<S>; e < kLadderHigh<S>; e += 8) k.push_back(e);
+  k.push_back(kLadderHigh<S>);
+  return k;
+}
+
+inline BaseScene ladderBase() {
+  BaseScene s = baseScene();
+  for (V3& v : s.b.vertices)
+    for (int a = 0; a < 3; ++a) v[a] = std::ldexp(std::round(std::ldexp(v[a], 20)), -20);
+  return s;
+}
+
+/// Rung k of the ladder: {a, b} of the base scene times 2^k, in S.
+template <class S>
+std::pair<TriangleMesh<S>, TriangleMesh<S>> ladderRung(int k) {
+  const BaseScene s = ladderBase();
+  const double f = std::ldexp(1.0, k);
+  return {transformed<S>(s.a, f, {0, 0, 0}), transformed<S>(s.b, f, {0, 0, 0})};
 }
 
 /// A 3x3 rotation given exactly (entries 0, +-1) plus a translation.

@@ -1,7 +1,8 @@
-// Bad input at every library entry point (issue 6): NaN/Inf coordinates and out-of-range indices
-// give InvalidInputError, files whose headers claim huge counts give MeshFileError at once, an
-// allocation failure under an address-space limit becomes an exception (never an abort), and a
-// failed call changes neither the caller's data nor a HashedMesh's state. The readers' own
+// Bad input at every library entry point (issue 6): NaN/Inf coordinates, out-of-range indices and
+// meshes whose largest coordinate lies outside [2^-247, 2^330] give InvalidInputError, files whose
+// headers claim huge counts give MeshFileError at once, an allocation failure under an
+// address-space limit becomes an exception (never an abort), and a failed call changes neither
+// the caller's data nor a HashedMesh's state. The readers' own
 // malformed-file cases live in test_mesh_io.cpp; the CLI's in cli_bad_input.cmake. An
 // environment knob (KDET_FCL_*) with a value it does not accept gives InvalidInputError too.
 
@@ -179,6 +180,77 @@ TYPED_TEST(BadInput, AFailedChangeKeepsTheHashedMeshAsItWas) {
     EXPECT_THROW(intersectSelf(h, o), BackendUnavailableError);
     EXPECT_THROW(intersectMeshes(h, b, o), BackendUnavailableError);
     unchanged("Backend::Cuda");
+  }
+}
+
+/// A double mesh whose largest coordinate magnitude lies outside [2^-247, 2^330] is refused
+/// wherever it would be hashed or queried (TriangleMesh::validateForQueries), naming the vertex
+/// that has it, and a refused change leaves the HashedMesh as it was; both ends of the range are
+/// accepted and give the pairs of the unscaled mesh; the readers' and writers' validate() takes
+/// such meshes (files may hold them). Before, a pair of cubes at 1e154 or 1e-170 made a query run
+/// for hours and one at 1e150 or 1e-300 gave a wrong pair set (test_extremes.cpp's ladder).
+TEST(BadInputRange, MeshesOutsideTheExactRangeAreRefusedWhereverTheyWouldBeQueried) {
+  using S = double;
+  const TriangleMesh<S> base = twoCrossing<S>();  // largest coordinate magnitude: 2 (vertex 1)
+  const auto scaled = [&](double f) {
+    TriangleMesh<S> m = base;
+    for (auto& v : m.vertices) v = {v.x * f, v.y * f, v.z * f};
+    return m;
+  };
+  const auto pairs0 = kdet_test::sorted(intersectSelf(HashedMesh<S>(base)).pairs);
+  ASSERT_EQ(pairs0.size(), 1u);
+  // The ends of the range: 2 * 2^329 = 2^330 and 2 * 2^-248 = 2^-247.
+  for (const double f : {std::ldexp(1.0, 329), std::ldexp(1.0, -248)}) {
+    const TriangleMesh<S> m = scaled(f);
+    EXPECT_NO_THROW(m.validateForQueries());
+    EXPECT_EQ(kdet_test::sorted(intersectSelf(HashedMesh<S>(m)).pairs), pairs0) << f;
+    EXPECT_EQ(kdet_test::sorted(bruteForceIntersectSelf(m)), pairs0) << f;
+  }
+  // Every vertex at the origin: magnitude 0, accepted (degenerate triangles, no pairs).
+  TriangleMesh<S> zero = base;
+  for (auto& v : zero.vertices) v = {0, 0, 0};
+  EXPECT_NO_THROW(zero.validateForQueries());
+  EXPECT_TRUE(intersectSelf(HashedMesh<S>(zero)).pairs.empty());
+  // Just outside either end (the largest coordinate one step beyond), and far outside.
+  std::vector<std::pair<TriangleMesh<S>, std::string>> out;
+  TriangleMesh<S> above = scaled(std::ldexp(1.0, 329));
+  above.vertices[1].x = std::nextafter(std::ldexp(1.0, 330), 1e308);
+  out.push_back({above, "2^330"});
+  TriangleMesh<S> below = scaled(std::ldexp(1.0, -248));
+  for (auto& v : below.vertices)
+    for (int a = 0; a < 3; ++a)
+      if (v[a] != 0) v[a] = std::nextafter(v[a], 0.0);
+  out.push_back({below, "2^-247"});
+  for (const double f : {1e154, 1e300, 1e-170, 1e-300, 1e-310})
+    out.push_back({scaled(f), f > 1 ? "2^330" : "2^-247"});
+  const TriangleMesh<S> good = base;
+  for (const auto& [bad, bound] : out) {
+    const TriangleMesh<S> copy = bad;
+    const std::string needle = "vertex 1";  // the largest coordinate's vertex
+    EXPECT_NO_THROW(bad.validate()) << bound;
+    expectInvalid([&] { bad.validateForQueries(); }, needle, "validateForQueries");
+    expectInvalid([&] { bad.validateForQueries(); }, bound, "validateForQueries (bound)");
+    expectInvalid([&] { HashedMesh<S> h(bad); }, needle, "HashedMesh");
+    expectInvalid([&] { (void)analyzeKFree(bad); }, needle, "analyzeKFree");
+    expectInvalid([&] { (void)bruteForceIntersectSelf(bad); }, needle, "bruteForceIntersectSelf");
+    expectInvalid([&] { (void)bruteForceIntersectMeshes(good, {}, bad, {}); }, needle,
+                  "bruteForceIntersectMeshes");
+    EXPECT_TRUE(sameBits(bad, copy)) << "a failed call changed the caller's mesh";
+    // A HashedMesh of the unscaled mesh refuses the change and keeps its pairs.
+    HashedMesh<S> h(good);
+    expectInvalid([&] { h.setMesh(bad); }, needle, "setMesh");
+    expectInvalid([&] { h.updateVertices(bad.vertices); }, needle, "updateVertices");
+    std::copy(bad.vertices.begin(), bad.vertices.end(), h.vertexWriteBuffer());
+    expectInvalid([&] { h.commitVertices(); }, needle, "commitVertices");
+    EXPECT_TRUE(sameBits(h.mesh(), good)) << bound;
+    EXPECT_EQ(kdet_test::sorted(intersectSelf(h).pairs), pairs0) << bound;
+  }
+  // Every float mesh lies inside the range: the largest and the smallest positive float.
+  for (const float x : {std::numeric_limits<float>::max(), std::numeric_limits<float>::denorm_min()}) {
+    TriangleMesh<float> m;
+    m.addTriangle({0, 0, 0}, {x, 0, 0}, {0, x, 0});
+    EXPECT_NO_THROW(m.validateForQueries()) << x;
+    EXPECT_TRUE(intersectSelf(HashedMesh<float>(m)).pairs.empty()) << x;
   }
 }
 

@@ -19,6 +19,7 @@
 #include <string>
 
 #include "cpu/hierarchical_hash.h"
+#include "extremes_scenes.h"
 #include "kept_self_scenario.h"
 #include "scoped_env.h"
 #include "test_util.h"
@@ -577,6 +578,23 @@ TYPED_TEST(CudaQueryTyped, ClothOverSphereAndSelf) {
       expectSameInter(cloth, sphere, "cloth/posed sphere " + std::to_string(k));
       expectSameInter(sphere, cloth, "posed sphere/cloth " + std::to_string(k));
     }
+  }
+}
+
+/// The scale ladder of test_extremes.cpp on the device: the same pairs as the CPU at every
+/// power-of-two scale of the range a mesh may have (largest coordinate 1.75 * 2^-247 to
+/// 1.75 * 2^329 in double), in both directions and the merged mesh's self query; a fresh mesh per
+/// rung, so every rung builds its hierarchy on the device anew.
+TYPED_TEST(CudaQueryTyped, PairsAreTheSameAtEveryScaleOfTheExactRange) {
+  KDET_SKIP_WITHOUT_DEVICE();
+  using S = TypeParam;
+  for (const int k : kdet_extremes::ladderRungs<S>()) {
+    const auto [a, b] = kdet_extremes::ladderRung<S>(k);
+    const HashedMesh<S> ha(a), hb(b), hm(kdet_extremes::merged(a, b));
+    const std::string at = "2^" + std::to_string(k);
+    EXPECT_GT(expectSameInter(ha, hb, at + " a/b"), 50u);
+    EXPECT_GT(expectSameInter(hb, ha, at + " b/a"), 50u);
+    EXPECT_GT(expectSameSelf(hm, at + " merged self"), 50u);
   }
 }
 

@@ -412,6 +412,34 @@ TYPED_TEST(Extremes, EveryScenePairSetEqualsTheExactReferee) {
   for (const auto& sc : sceneTable<TypeParam>()) runScene(sc);
 }
 
+// ------------------------------------------------------------------ the scale ladder
+
+/// The same pairs at every power-of-two scale of the range a mesh may have (extremes_scenes.h:
+/// ladderRung): the hierarchy adapts to the scale and the predicates stay exact, from a largest
+/// coordinate of 1.75 * 2^-247 to 1.75 * 2^329 in double (2^-129 .. 2^126 in float). Below and
+/// above that range meshes are refused (test_bad_input.cpp): at 1e154 and from 1e-165 to 1e-200
+/// the queries of a pair of cubes used to run for hours (squared edges overflowing or underflowing
+/// made the level of every triangle 0 and its cells up to 2^38 per axis), and at 1e150, 1e-150
+/// and 1e-300 they returned wrong pair sets.
+TYPED_TEST(Extremes, PairsAreTheSameAtEveryScaleOfTheExactRange) {
+  using S = TypeParam;
+  const auto [a0, b0] = ladderRung<S>(0);
+  const auto inter0 = kdet_test::sorted(bruteForceIntersectMeshes(a0, {}, b0, {}));
+  const auto self0 = kdet_test::sorted(bruteForceIntersectSelf(merged(a0, b0)));
+  ASSERT_GT(inter0.size(), 50u);
+  ASSERT_GT(self0.size(), 50u);  // (fewer: pairs that share a vertex by coordinates are adjacent)
+  for (const int k : ladderRungs<S>()) {
+    const auto [a, b] = ladderRung<S>(k);
+    const HashedMesh<S> ha(a), hb(b), hm(merged(a, b));
+    EXPECT_EQ(kdet_test::sorted(intersectMeshes(ha, hb).pairs), inter0) << "2^" << k;
+    EXPECT_EQ(kdet_test::sorted(intersectSelf(hm).pairs), self0) << "2^" << k;
+    if (k == kLadderLow<S> || k == kLadderHigh<S>) {
+      EXPECT_EQ(kdet_test::sorted(bruteForceIntersectMeshes(a, {}, b, {})), inter0) << "2^" << k;
+      EXPECT_EQ(kdet_test::sorted(bruteForceIntersectSelf(merged(a, b))), self0) << "2^" << k;
+    }
+  }
+}
+
 // ------------------------------------------------------------------ poses at the tolerance
 
 /// R0 * (I + d*E) for a fixed symmetric E: R^T R - I is about 2 d E, so d walks the defect across

@@ -783,6 +783,74 @@ TEST(FclCollideBadInput, NaNVerticesAndPosesThrow) {
   kdet_fcl::clearCache();
 }
 
+// Null objects, null callback data, point clouds and meshes outside the exact coordinate range:
+// each crashed, hung or answered wrongly before (a segfault in kdet_fcl::collide for a null
+// CollisionObject, and in FCL for every query of a point cloud; hours for cubes at 1e154) and is
+// now a typed exception.
+TEST(FclCollideBadInput, NullObjectsPointCloudsAndHugeMeshesThrow) {
+  const TriangleMesh<double> ball = kdet_fcl::makeSphere<double>({0, 0, 0}, 1.0, 12, 6);
+  auto a = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(ball);
+  const fcl::Transform3d I = fcl::Transform3d::Identity();
+  fcl::CollisionRequestd req(100, true);
+  fcl::CollisionResultd res;
+  fcl::DistanceRequestd dreq;
+  fcl::DistanceResultd dres;
+  fcl::CollisionObjectd obj(a);
+  const fcl::CollisionObjectd* none = nullptr;
+  EXPECT_THROW(kdet_fcl::collide(none, &obj, req, res), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(kdet_fcl::collide(&obj, none, req, res), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(kdet_fcl::selfCollide(none, req, res), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(kdet_fcl::distance(none, &obj, dreq, dres), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(kdet_fcl::DefaultCollisionFunction<double>(&obj, &obj, nullptr),
+               kdet_fcl::InvalidInputError);
+  double dist = 0;
+  EXPECT_THROW(kdet_fcl::DefaultDistanceFunction<double>(&obj, &obj, nullptr, dist),
+               kdet_fcl::InvalidInputError);
+  // A built point cloud (FCL's type for vertices without triangles). FCL 0.7's own endModel reads
+  // a zero-length triangle array on the way to one, so the test makes it from a built mesh by
+  // dropping its triangle count, which is all getModelType() looks at.
+  auto cloud = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(ball);
+  cloud->num_tris = 0;
+  ASSERT_EQ(cloud->getModelType(), fcl::BVH_MODEL_POINTCLOUD);
+  auto box = std::make_shared<fcl::Boxd>(1, 1, 1);
+  for (const fcl::CollisionGeometryd* other :
+       {static_cast<const fcl::CollisionGeometryd*>(a.get()),
+        static_cast<const fcl::CollisionGeometryd*>(box.get())}) {
+    EXPECT_THROW(kdet_fcl::collide(cloud.get(), I, other, I, req, res),
+                 kdet_fcl::UnsupportedQueryError);
+    EXPECT_THROW(kdet_fcl::collide(other, I, cloud.get(), I, req, res),
+                 kdet_fcl::UnsupportedQueryError);
+    EXPECT_THROW(kdet_fcl::distance(other, I, cloud.get(), I, dreq, dres),
+                 kdet_fcl::UnsupportedQueryError);
+    EXPECT_THROW(kdet_fcl::guardedCollide(cloud.get(), I, other, I, req, res),
+                 kdet_fcl::UnsupportedQueryError);
+    EXPECT_THROW(kdet_fcl::guardedDistance(other, I, cloud.get(), I, dreq, dres),
+                 kdet_fcl::UnsupportedQueryError);
+  }
+  EXPECT_EQ(kdet_fcl::selfCollide(cloud.get(), I, req, res), 0u);  // not a mesh: adds nothing
+  cloud->num_tris = static_cast<int>(ball.numTriangles());  // (its destructor's business)
+  // kdet_fcl::Mesh does not build a point cloud (FCL's endModel would read that array): it
+  // returns FCL's "unsupported" code and stays unbuilt, so queries say so.
+  kdet_fcl::Meshd points;
+  points.beginModel(4, 0);
+  std::vector<fcl::Vector3d> ps = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  ASSERT_EQ(points.addSubModel(ps, std::vector<fcl::Triangle>{}), fcl::BVH_OK);
+  EXPECT_EQ(points.endModel(), fcl::BVH_ERR_UNSUPPORTED_FUNCTION);
+  EXPECT_THROW(kdet_fcl::collide(&points, I, a.get(), I, req, res), kdet_fcl::InvalidInputError);
+  // A mesh beyond 2^330 (a cube of half-size 1e154 took hours in the query before).
+  TriangleMesh<double> huge = ball;
+  for (auto& v : huge.vertices) v = {v.x * 1e154, v.y * 1e154, v.z * 1e154};
+  auto h1 = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(huge);
+  auto h2 = makeModel<fcl::BVHModel<fcl::OBBRSSd>>(huge);
+  try {
+    kdet_fcl::collide(h1.get(), I, h2.get(), I, req, res);
+    ADD_FAILURE() << "no InvalidInputError";
+  } catch (const kdet_fcl::InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("2^330"), std::string::npos) << e.what();
+  }
+  kdet_fcl::clearCache();
+}
+
 // An empty model (endModel with nothing added: FCL prints an error and calls its type unknown)
 // meets nothing, against a mesh or a shape, in either place; FCL's own collide crashes on it.
 TEST(FclCollideBadInput, AnEmptyModelMeetsNothing) {

@@ -781,6 +781,13 @@ TEST(FclManager, NaNBoxesThrowAndLeaveTheManagerUnchanged) {
   EXPECT_THROW(m.registerObjects({env[0].get(), &bad}), kdet_fcl::InvalidInputError);
   EXPECT_THROW(m.registerObject(nullptr), kdet_fcl::InvalidInputError);
   Recorder r;
+  // A null callback (FCL's managers call it unchecked).
+  EXPECT_THROW(m.collide(&r, nullptr), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(m.collide(env[0].get(), &r, nullptr), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(m.collide(&m, &r, nullptr), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(m.distance(&r, nullptr), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(m.distance(env[0].get(), &r, nullptr), kdet_fcl::InvalidInputError);
+  EXPECT_THROW(m.distance(&m, &r, nullptr), kdet_fcl::InvalidInputError);
   EXPECT_THROW(m.collide(&bad, &r, recordCallback<double>), kdet_fcl::InvalidInputError);
   MinDistance<double> d;
   EXPECT_THROW(m.distance(&bad, &d, minDistanceCallback<double>), kdet_fcl::InvalidInputError);

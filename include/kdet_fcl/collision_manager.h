@@ -30,7 +30,8 @@
 ///   unregistering or updating an unknown object does nothing. A callback must not modify the
 ///   manager it is called from.
 /// - Bad input is an exception, never a crash: an AABB with a NaN bound (FCL's tree segfaults on
-///   one, fcl#535) or a null object throws InvalidInputError and leaves the manager unchanged.
+///   one, fcl#535), a null object or a null callback throws InvalidInputError and leaves the
+///   manager unchanged.
 /// - Distance: the callback gets FCL's in/out upper bound `dist` (std::numeric_limits<S>::max() at
 ///   the start) and is called for an object pair only while the pair's AABB distance is below it,
 ///   so the minimum found equals that of FCL's NaiveCollisionManager. distance(obj) visits the

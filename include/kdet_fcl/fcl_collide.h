@@ -7,8 +7,9 @@
 /// Which pairs take the kDet path: both geometries are triangle meshes (`getObjectType() ==
 /// OT_BVH` and `getModelType() == BVH_MODEL_TRIANGLES`): an `fcl::BVHModel<BV>` of any BV type
 /// FCL has (AABB, OBB, RSS, kIOS, OBBRSS, KDOP<16|18|24>) or a kdet_fcl::Mesh<S>, in any mix of
-/// BV types (FCL itself refuses mixed pairs). Every other pair (shapes, octrees, point clouds) is
-/// forwarded to `fcl::collide` unchanged.
+/// BV types (FCL itself refuses mixed pairs). Every other pair (shapes, octrees) is forwarded to
+/// `fcl::collide` unchanged, except a point-cloud BVHModel (vertices without triangles), which
+/// FCL 0.7 crashes on in every query: UnsupportedQueryError.
 ///
 /// Result conventions on the kDet path (FCL's, fcl-notes §1.5):
 ///  - one fcl::Contact per intersecting triangle pair (closed triangles, decided exactly: touching
@@ -34,10 +35,12 @@
 ///    `num_max_cost_sources`; the search is then exhaustive (FCL's isSatisfied() is false).
 ///    Pairs of geometries that are neither occupied nor free add cost sources only, as in FCL.
 ///
-/// Bad input throws InvalidInputError (FCL would return garbage or crash): NaN/Inf vertices or
-/// out-of-range indices in a mesh on the kDet path, a mesh that is not built (between beginModel
-/// and endModel, or inside an update/replace block), a non-finite pose (any pair), and a pose
-/// whose rotation is not orthonormal within HashedMesh::orthonormalTolerance() (kDet path).
+/// Bad input throws InvalidInputError (FCL would return garbage or crash): a null geometry or
+/// collision object, NaN/Inf vertices, out-of-range indices or a largest coordinate magnitude
+/// outside [2^-247, 2^330] (TriangleMesh::validateForQueries) in a mesh on the kDet path, a mesh
+/// that is not built (between beginModel and endModel, or inside an update/replace block), a
+/// non-finite pose (any pair), and a pose whose rotation is not orthonormal within
+/// HashedMesh::orthonormalTolerance() (kDet path); the default callbacks throw it for null data.
 ///
 /// The structure cache (plain BVHModels). kDet hashes each mesh once in its own frame; a new pose
 /// costs nothing more. The hash of a plain fcl::BVHModel is kept in a process-wide cache keyed by

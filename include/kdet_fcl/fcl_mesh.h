@@ -89,6 +89,8 @@ class Mesh : public fcl::BVHModel<fcl::OBBRSS<S>> {
   using Base::addVertex;
   /// FCL's endModel (builds the BVH), then computeLocalAABB() and the kDet hash. A mesh with
   /// NaN/Inf coordinates still builds for FCL; kdet_fcl queries on it throw InvalidInputError.
+  /// Vertices without triangles (a point cloud, which FCL 0.7 crashes building and querying)
+  /// return BVH_ERR_UNSUPPORTED_FUNCTION and stay unbuilt (queries then throw).
   int endModel();
 
   // ---- FCL's replace family. ----

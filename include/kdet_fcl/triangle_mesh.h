@@ -27,8 +27,16 @@ struct TriangleMesh {
   /// Throws InvalidInputError naming the first problem: a NaN or infinite coordinate (with the
   /// vertex index), an index out of range (with the triangle index), more than 2^32-2 triangles
   /// or vertices, or (when `require_triangles`) no triangles at all. Degenerate triangles
-  /// (zero area, repeated indices) are valid.
+  /// (zero area, repeated indices) are valid. (What the mesh readers and writers check.)
   void validate(bool require_triangles = false, const std::string& what = "mesh") const;
+
+  /// validate(), and also a largest coordinate magnitude outside [2^-247, 2^330] (about
+  /// [4.4e-75, 2.2e99]; 0, every vertex at the origin, is fine), naming the vertex that has it:
+  /// what a mesh must meet to be hashed or queried (HashedMesh, its vertex updates, the brute
+  /// force, the k-free analysis, kdet_fcl::collide's meshes). Outside it the hierarchy's levels
+  /// no longer bound a triangle's cells and the exact predicates lose their guarantee
+  /// (docs/numerics.md). Every float mesh is inside the range.
+  void validateForQueries(bool require_triangles = false, const std::string& what = "mesh") const;
 
   /// Whether triangles i and j share a vertex: the same index, or equal coordinates (so that
   /// triangle soups work). Such pairs are adjacent, not colliding: the self-collision rule of

@@ -203,6 +203,12 @@ class BadInput(unittest.TestCase):
                                                  [[0, 1, 2]]), "non-finite")
         self.assertInvalid(lambda: kdet_fcl.Mesh([[np.inf, 0, 0], [1, 0, 0], [0, 1, 0]],
                                                  [[0, 1, 2]]), "non-finite")
+        # Beyond the range where the hierarchy and the exact predicates hold (a query of such a
+        # mesh ran for hours or answered wrongly before); its ends are fine.
+        self.assertInvalid(lambda: kdet_fcl.Mesh(V * 1e154, [[0, 1, 2]]), "2^330")
+        self.assertInvalid(lambda: kdet_fcl.Mesh(V * 1e-170, [[0, 1, 2]]), "2^-247")
+        kdet_fcl.Mesh(V * 2.0 ** 330, [[0, 1, 2]])
+        kdet_fcl.Mesh(V * 2.0 ** -247, [[0, 1, 2]])
         self.assertInvalid(lambda: kdet_fcl.Mesh(V, [[0, 1, 2]], rotation=np.eye(3) * 2),
                            "orthonormal")
         self.assertInvalid(lambda: kdet_fcl.Mesh(V, [[0, 1, 2]], rotation=np.eye(4)), "3x3")
@@ -443,6 +449,21 @@ class FclApi(unittest.TestCase):
         with self.assertRaises(ValueError):
             fcl.CollisionObject(None)
         self.assertLess(fcl.BVHModel().endModel(), 0)  # FCL's own sequence check: a code
+        # Vertices without triangles (a point cloud: FCL 0.7 crashed building it in endModel,
+        # and crashes in every query of one): not built, a code, then a clear error.
+        cloud = fcl.BVHModel()
+        cloud.beginModel(3, 0)
+        cloud.addSubModel(np.eye(3), np.zeros((0, 3), int))
+        self.assertLess(cloud.endModel(), 0)
+        with self.assertRaises(kdet_fcl.InvalidInputError):
+            fcl.CollisionObject(cloud)
+        huge = fcl.BVHModel()
+        huge.beginModel()
+        huge.addSubModel(np.eye(3) * 1e200, [[0, 1, 2]])
+        huge.endModel()
+        with self.assertRaises(kdet_fcl.InvalidInputError) as cm:
+            fcl.collide(fcl.CollisionObject(huge), fcl.CollisionObject(self.ms))
+        self.assertIn("2^330", str(cm.exception))
         # Shapes of non-finite or non-positive size (FCL answers a NaN sphere with no contact).
         for make in (lambda: fcl.Sphere(np.nan), lambda: fcl.Box(1, np.inf, 1),
                      lambda: fcl.Capsule(0.1, -1), lambda: fcl.Cylinder(0, 1),

@@ -71,6 +71,14 @@ const fcl::AABB<S>& checkedAabb(const fcl::CollisionObject<S>* obj, const char* 
   return a;
 }
 
+/// Throws InvalidInputError for a null callback (FCL's managers call it unchecked and crash).
+template <class Callback>
+void requireCallback(Callback callback, const char* where) {
+  if (callback == nullptr)
+    throw InvalidInputError(std::string("kdet_fcl::CollisionManager::") + where +
+                            ": null callback");
+}
+
 /// One box of a distance sweep.
 template <class S>
 struct SweepItem {
@@ -725,6 +733,7 @@ void CollisionManager<S>::getObjects(std::vector<fcl::CollisionObject<S>*>& objs
 template <class S>
 void CollisionManager<S>::collide(fcl::CollisionObject<S>* obj, void* cdata,
                                   fcl::CollisionCallBack<S> callback) const {
+  requireCallback(callback, "collide");
   const Impl& m = *impl_;
   const Aabb<double> q = toBox(checkedAabb(obj, "collide"));
   if (m.index.empty()) return;
@@ -734,6 +743,7 @@ void CollisionManager<S>::collide(fcl::CollisionObject<S>* obj, void* cdata,
 
 template <class S>
 void CollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback) const {
+  requireCallback(callback, "collide");
   if (impl_->index.size() < 2) return;
   impl_->ensureFresh();
   impl_->selfCollide(cdata, callback);
@@ -742,6 +752,7 @@ void CollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callbac
 template <class S>
 void CollisionManager<S>::collide(fcl::BroadPhaseCollisionManager<S>* other_manager, void* cdata,
                                   fcl::CollisionCallBack<S> callback) const {
+  requireCallback(callback, "collide");
   const Impl& m = *impl_;
   if (other_manager == nullptr) return;
   if (other_manager == this) {
@@ -787,6 +798,7 @@ void CollisionManager<S>::collide(fcl::BroadPhaseCollisionManager<S>* other_mana
 template <class S>
 void CollisionManager<S>::distance(fcl::CollisionObject<S>* obj, void* cdata,
                                    fcl::DistanceCallBack<S> callback) const {
+  requireCallback(callback, "distance");
   const Impl& m = *impl_;
   const fcl::AABB<S>& q = checkedAabb(obj, "distance");
   if (m.index.empty()) return;
@@ -807,6 +819,7 @@ void CollisionManager<S>::distance(fcl::CollisionObject<S>* obj, void* cdata,
 
 template <class S>
 void CollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> callback) const {
+  requireCallback(callback, "distance");
   const Impl& m = *impl_;
   if (m.index.size() < 2) return;
   std::vector<const fcl::AABB<S>*> boxes;
@@ -825,6 +838,7 @@ void CollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> callbac
 template <class S>
 void CollisionManager<S>::distance(fcl::BroadPhaseCollisionManager<S>* other_manager, void* cdata,
                                    fcl::DistanceCallBack<S> callback) const {
+  requireCallback(callback, "distance");
   const Impl& m = *impl_;
   if (other_manager == nullptr) return;
   if (other_manager == this) {

@@ -101,7 +101,7 @@ TriangleMesh<S> toTriangleMesh(const FclMeshView<S>& v) {
   for (int t = 0; t < v.num_tris; ++t)
     for (int k = 0; k < 3; ++k) {
       const std::size_t id = v.triangles[t][k];
-      // Out-of-range ids become an id validate() rejects, with the triangle's index.
+      // Out-of-range ids become an id validateForQueries() rejects, with the triangle's index.
       m.triangles[t][k] = id < 0xFFFFFFFFull ? std::uint32_t(id) : 0xFFFFFFFFu;
     }
   return m;
@@ -173,12 +173,12 @@ void syncEntry(FclMeshEntry<S>& e, const FclMeshView<S>& v) {
       try {
         e.hashed->commitVertices();
       } catch (const InvalidInputError&) {
-        toTriangleMesh(v).validate(false, "kdet_fcl: BVHModel");  // the message of a new mesh
+        toTriangleMesh(v).validateForQueries(false, "kdet_fcl: BVHModel");  // the message of a new mesh
         throw;
       }
     } else {
       TriangleMesh<S> mesh = toTriangleMesh(v);
-      mesh.validate(false, "kdet_fcl: BVHModel");
+      mesh.validateForQueries(false, "kdet_fcl: BVHModel");
       if (e.hashed) {
         e.hashed->setMesh(std::move(mesh));
       } else {
@@ -270,7 +270,9 @@ bool samePose(const Transform<S>& a, const Transform<S>& b) {
 
 /// Before a query goes to FCL: a BVHModel must be built (FCL's traversals read its hierarchy and
 /// crash on one between beginModel and endModel, inside an update, or empty, which endModel
-/// refuses), and a kdet_fcl::Mesh in KdetOnly mode gets FCL's BVH refitted.
+/// refuses) and hold triangles (FCL 0.7 segfaults in every collide and distance of a point cloud,
+/// BVH_MODEL_POINTCLOUD: UnsupportedQueryError), and a kdet_fcl::Mesh in KdetOnly mode gets FCL's
+/// BVH refitted.
 template <class S>
 void prepareForFcl(const fcl::CollisionGeometry<S>* g, const char* what) {
   FclMeshView<S> v;
@@ -283,6 +285,10 @@ void prepareForFcl(const fcl::CollisionGeometry<S>* g, const char* what) {
              ? ": an empty BVHModel (no triangles: FCL's endModel refuses it)"
              : ": a BVHModel that is not built (call endModel, endUpdateModel or "
                "endReplaceModel before querying it)"));
+  if (!v.triangles_model)
+    throw UnsupportedQueryError(std::string("kdet_fcl::") + what +
+                                ": a point-cloud BVHModel (vertices without triangles): FCL 0.7 "
+                                "has no collision or distance query for it (it crashes)");
   if (v.kdet_mesh == nullptr) return;
   if (!detail::MeshAccess<S>::fclStale(*v.kdet_mesh)) return;
   std::lock_guard<std::mutex> lock(detail::MeshAccess<S>::entry(*v.kdet_mesh)->mutex);
@@ -512,9 +518,17 @@ std::size_t collide(const fcl::CollisionGeometry<S>* o1, const fcl::Transform3<S
   return fcl::collide(o1, tf1, o2, tf2, request, result);
 }
 
+/// Throws InvalidInputError for a null collision object (`what`: the call).
+template <typename S>
+void requireObject(const fcl::CollisionObject<S>* o, const char* what) {
+  if (o == nullptr) throw InvalidInputError(std::string("kdet_fcl::") + what + ": null object");
+}
+
 template <typename S>
 std::size_t collide(const fcl::CollisionObject<S>* o1, const fcl::CollisionObject<S>* o2,
                     const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result) {
+  requireObject(o1, "collide");
+  requireObject(o2, "collide");
   return kdet_fcl::collide(o1->collisionGeometry().get(), o1->getTransform(),
                  o2->collisionGeometry().get(), o2->getTransform(), request, result);
 }
@@ -552,6 +566,7 @@ std::size_t selfCollide(const fcl::CollisionGeometry<S>* g, const fcl::Transform
 template <typename S>
 std::size_t selfCollide(const fcl::CollisionObject<S>* o, const fcl::CollisionRequest<S>& request,
                         fcl::CollisionResult<S>& result) {
+  requireObject(o, "selfCollide");
   return kdet_fcl::selfCollide(o->collisionGeometry().get(), o->getTransform(), request, result);
 }
 
@@ -570,6 +585,8 @@ S distance(const fcl::CollisionGeometry<S>* o1, const fcl::Transform3<S>& tf1,
 template <typename S>
 S distance(const fcl::CollisionObject<S>* o1, const fcl::CollisionObject<S>* o2,
            const fcl::DistanceRequest<S>& request, fcl::DistanceResult<S>& result) {
+  requireObject(o1, "distance");
+  requireObject(o2, "distance");
   return kdet_fcl::distance(o1->collisionGeometry().get(), o1->getTransform(),
                   o2->collisionGeometry().get(), o2->getTransform(), request, result);
 }
@@ -577,6 +594,9 @@ S distance(const fcl::CollisionObject<S>* o1, const fcl::CollisionObject<S>* o2,
 template <typename S>
 bool DefaultCollisionFunction(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2,
                               void* data) {
+  if (data == nullptr)
+    throw InvalidInputError(
+        "kdet_fcl::DefaultCollisionFunction: null data (an fcl::DefaultCollisionData)");
   auto* cdata = static_cast<fcl::DefaultCollisionData<S>*>(data);
   const fcl::CollisionRequest<S>& request = cdata->request;
   fcl::CollisionResult<S>& result = cdata->result;
@@ -591,6 +611,9 @@ bool DefaultCollisionFunction(fcl::CollisionObject<S>* o1, fcl::CollisionObject<
 template <typename S>
 bool DefaultDistanceFunction(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data,
                              S& dist) {
+  if (data == nullptr)
+    throw InvalidInputError(
+        "kdet_fcl::DefaultDistanceFunction: null data (an fcl::DefaultDistanceData)");
   auto* cdata = static_cast<fcl::DefaultDistanceData<S>*>(data);
   const fcl::DistanceRequest<S>& request = cdata->request;
   fcl::DistanceResult<S>& result = cdata->result;

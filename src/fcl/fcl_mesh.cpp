@@ -115,6 +115,16 @@ int Mesh<S>::beginModel(int num_tris, int num_vertices) {
 
 template <class S>
 int Mesh<S>::endModel() {
+  // A point cloud (vertices, no triangles): FCL 0.7's endModel shrinks the triangle array to
+  // `new Triangle[0]`, a pointer that is not null, and its BV fitter then reads triangles through
+  // it (a segfault, or BVs from garbage); every FCL query of a point cloud crashes as well. It is
+  // left unbuilt, so that queries report it (InvalidInputError) instead of crashing.
+  if (this->build_state == fcl::BVH_BUILD_STATE_BEGUN && this->num_tris == 0 &&
+      this->num_vertices > 0) {
+    std::cerr << "BVH Error! kdet_fcl::Mesh::endModel: vertices without triangles (a point "
+                 "cloud); FCL 0.7 crashes building and querying it, so it is not built.\n";
+    return fcl::BVH_ERR_UNSUPPORTED_FUNCTION;
+  }
   // FCL's BVH is always built here (KdetOnly skips only refits): a later refitFcl() needs it.
   const int code = Base::endModel();
   fcl_stale_ = false;

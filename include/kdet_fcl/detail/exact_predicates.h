@@ -44,6 +44,15 @@
 namespace kdet_fcl {
 namespace detail {
 
+/// The bounds of the validity range above: 2^-247 and 2^330. A mesh whose largest coordinate
+/// magnitude lies outside [kExactMinMagnitude, kExactMaxMagnitude] (and is not 0) is refused by
+/// TriangleMesh::validate() and by every vertex update (checkCoordinateRange()): at such scales
+/// the diameters' squares overflow or underflow, so the hierarchy's levels no longer bound the
+/// cells a triangle covers (a query would enumerate up to 2^38 cells per axis), and the
+/// predicates' signs are no longer exact.
+constexpr double kExactMinMagnitude = 0x1p-247;
+constexpr double kExactMaxMagnitude = 0x1p330;
+
 /// Converts a point to double coordinates. Exact for float and double inputs (every float is a
 /// double), which is what lets the exact predicates decide float geometry exactly.
 template <class S>
