@@ -1059,6 +1059,21 @@ TEST(CudaQuery, ACommitCopiesThePositionsWhileItChecksThemAndARefusedOneLeavesTh
     EXPECT_EQ(paths(), std::make_pair(0, bad == 0 ? 0 : 1)) << what;
     expectSameSelf(cloth, what + ", self");
   }
+  {
+    // Refused for its scale (a largest coordinate beyond 2^330): every coordinate is finite, so
+    // every piece went to the device before the bounds said no; the positions go up again.
+    const std::string what = "refused for its scale";
+    const std::vector<Vec3<double>> before = cloth.mesh().vertices;
+    const TriangleMesh<double> next = frame(0.95);
+    Vec3<double>* w = cloth.vertexWriteBuffer();
+    std::copy(next.vertices.begin(), next.vertices.end(), w);
+    w[3].x = 1e200;
+    EXPECT_THROW(cloth.commitVertices(), InvalidInputError) << what;
+    EXPECT_EQ(cloth.mesh().vertices, before) << what;
+    expectSameInter(cloth, sphere, what);
+    EXPECT_EQ(paths(), std::make_pair(0, 1)) << what;
+    expectSameSelf(cloth, what + ", self");
+  }
   commit(0.85);
   expectSameInter(cloth, sphere, "after the refusals");
   EXPECT_EQ(paths(), std::make_pair(1, 0));

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Session 56's device calls (carry .fcl-debs/root and .gpu-data; run from the checkout's root):
+#   calls.sh check   (fresh machine, about 7 minutes) the project's GPU check as a user runs it:
+#                    scripts/gpu_check.sh with ctest -L cuda (with this session's scale ladder,
+#                    CudaQueryTyped.PairsAreTheSameAtEveryScaleOfTheExactRange, and the commit
+#                    refused for its scale), memcheck and gpu_bench on the cloth ball, into
+#                    $OUT/check (session 49's next_check.sh check)
+#   calls.sh range   (the same machine; build-gpu reused) the CPU-side tests of the change on
+#                    the GPU machine: the bad-input, extremes, FCL collide and manager tests, into
+#                    $OUT/range.txt
+set -uo pipefail
+cd "$(dirname "$0")/../../.."
+OUT="${OUT:-gpu-logs}"; mkdir -p "$OUT"
+DEBS="$PWD/.fcl-debs/root"; LIB="$DEBS/usr/lib/x86_64-linux-gnu"
+case "${1:-}" in
+  check)
+    bash benchmarks/results/gpu-session49/next_check.sh check
+    tail -n 30 "$OUT/gpu_check.log" ;;
+  range)
+    export LD_LIBRARY_PATH="$LIB${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    {
+      nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv
+      cmake --build build-gpu -j"$(nproc)" --target test_bad_input test_extremes \
+        test_fcl_collide test_fcl_manager >/dev/null && echo "build OK"
+      for t in test_bad_input test_extremes test_fcl_collide test_fcl_manager; do
+        echo "== $t"; build-gpu/tests/$t 2>&1 | tail -n 3
+      done
+    } >"$OUT/range.txt" 2>&1
+    cat "$OUT/range.txt" ;;
+  *) echo "usage: calls.sh check|range" >&2; exit 2 ;;
+esac
