@@ -493,6 +493,8 @@ int runCollide(const QueryCliOptions& o) {
   auto t0 = Clock::now();
   TriangleMesh<S> ma = readMesh<S>(o.files[0]);
   TriangleMesh<S> mb = readMesh<S>(o.files[1]);
+  ma.validateForQueries(false, o.files[0]);  // a refusal names the file
+  mb.validateForQueries(false, o.files[1]);
   const double read_ms = msSince(t0);
   const std::size_t na = ma.triangles.size(), nb = mb.triangles.size();
   const RunsOn on = runsOn(o.common, na + nb);
@@ -528,6 +530,7 @@ template <class S>
 int runSelf(const QueryCliOptions& o) {
   auto t0 = Clock::now();
   TriangleMesh<S> m = readMesh<S>(o.files[0]);
+  m.validateForQueries(false, o.files[0]);  // a refusal names the file
   const double read_ms = msSince(t0);
   const std::size_t n = m.triangles.size();
   const RunsOn on = runsOn(o.common, n);
@@ -618,6 +621,7 @@ int runAnalyze(const AnalyzeOptions& o) {
     try {
       const auto t0 = Clock::now();
       const TriangleMesh<S> m = readMesh<S>(f);
+      m.validateForQueries(false, f);  // a refusal names the file
       const KFreeStats s = analyzeKFree(m, ko);
       const double sec = msSince(t0) / 1000.0;
       std::printf("%-40s %10zu %8u %9.3f %9.3f %9u %9.3f %6d %9.3f\n", f.c_str(), s.triangles, s.k,
