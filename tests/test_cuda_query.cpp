@@ -389,9 +389,9 @@ TYPED_TEST(CudaQueryTyped, PairsOnTheDeviceAreTheHostQueryPairs) {
 }
 
 #if KDET_FCL_TEST_HAVE_CUDA
-// Every knob of the CUDA backend (cuda_backend.h, README.md) accepts its values and rejects any
-// other with InvalidInputError naming the variable and the value; every query runs the same
-// check first (cuda::checkKnobs). Needs no device.
+// Every knob of the CUDA backend (cuda_backend.h, docs/cuda-backend.md) accepts its values and
+// rejects any other with InvalidInputError naming the variable and the value; every query runs
+// the same check first (cuda::checkKnobs). Needs no device.
 TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
   struct Knob {
     const char* name;
