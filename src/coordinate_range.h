@@ -1,6 +1,7 @@
 #pragma once
 // The coordinate range every mesh must keep (detail::kExactMinMagnitude, kExactMaxMagnitude in
-// exact_predicates.h): TriangleMesh::validate() and HashedMesh's vertex updates share it.
+// exact_predicates.h): TriangleMesh::validateForQueries() and HashedMesh's vertex updates share
+// it.
 
 #include <cmath>
 #include <sstream>

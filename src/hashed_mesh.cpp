@@ -201,7 +201,7 @@ bool finiteBounds(const std::vector<Vec3<S>>& v, detail::Aabb<double>* out, int 
 }
 
 /// InvalidInputError naming the first non-finite coordinate of `v`, or the vertex that puts its
-/// largest magnitude outside the exact range (TriangleMesh::validate), prefixed by `what`
+/// largest magnitude outside the exact range (TriangleMesh::validateForQueries), prefixed by `what`
 /// (updateVertices, commitVertices).
 template <class S>
 [[noreturn]] void throwBadVertices(const std::vector<Vec3<S>>& v, const char* what) {
@@ -212,7 +212,7 @@ template <class S>
 }
 
 /// Whether finite bounds `b` keep the mesh's largest coordinate magnitude in the exact range
-/// (detail::inExactRange: what TriangleMesh::validate requires, read off the bounds for free).
+/// (detail::inExactRange: what TriangleMesh::validateForQueries requires, read off the bounds).
 bool boundsInRange(const detail::Aabb<double>& b) {
   return detail::inExactRange(detail::largestMagnitude(b));
 }

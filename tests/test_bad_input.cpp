@@ -246,7 +246,8 @@ TEST(BadInputRange, MeshesOutsideTheExactRangeAreRefusedWhereverTheyWouldBeQueri
     EXPECT_EQ(kdet_test::sorted(intersectSelf(h).pairs), pairs0) << bound;
   }
   // Every float mesh lies inside the range: the largest and the smallest positive float.
-  for (const float x : {std::numeric_limits<float>::max(), std::numeric_limits<float>::denorm_min()}) {
+  for (const float x :
+       {std::numeric_limits<float>::max(), std::numeric_limits<float>::denorm_min()}) {
     TriangleMesh<float> m;
     m.addTriangle({0, 0, 0}, {x, 0, 0}, {0, x, 0});
     EXPECT_NO_THROW(m.validateForQueries()) << x;

@@ -173,7 +173,8 @@ void syncEntry(FclMeshEntry<S>& e, const FclMeshView<S>& v) {
       try {
         e.hashed->commitVertices();
       } catch (const InvalidInputError&) {
-        toTriangleMesh(v).validateForQueries(false, "kdet_fcl: BVHModel");  // the message of a new mesh
+        // The message a new mesh would give.
+        toTriangleMesh(v).validateForQueries(false, "kdet_fcl: BVHModel");
         throw;
       }
     } else {

@@ -46,10 +46,10 @@ namespace detail {
 
 /// The bounds of the validity range above: 2^-247 and 2^330. A mesh whose largest coordinate
 /// magnitude lies outside [kExactMinMagnitude, kExactMaxMagnitude] (and is not 0) is refused by
-/// TriangleMesh::validate() and by every vertex update (checkCoordinateRange()): at such scales
-/// the diameters' squares overflow or underflow, so the hierarchy's levels no longer bound the
-/// cells a triangle covers (a query would enumerate up to 2^38 cells per axis), and the
-/// predicates' signs are no longer exact.
+/// TriangleMesh::validateForQueries() and by HashedMesh's vertex updates (src/coordinate_range.h):
+/// at such scales the diameters' squares overflow or underflow, so the hierarchy's levels no
+/// longer bound the cells a triangle covers (a query would enumerate up to 2^38 cells per axis),
+/// and the predicates' signs are no longer exact.
 constexpr double kExactMinMagnitude = 0x1p-247;
 constexpr double kExactMaxMagnitude = 0x1p330;
 
