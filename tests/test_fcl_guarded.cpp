@@ -1,7 +1,8 @@
 // kdet_fcl::guardedCollide and guardedDistance (include/kdet_fcl/fcl_guarded.h): the pairs and
 // poses where FCL 0.7 crashes, aborts, hangs or has no test are refused or answered, and where
-// FCL answers, the answer is FCL's. Each case below aborted, crashed or went unanswered in FCL
-// 0.7 itself (benchmarks/results/python-compat/): a regression here ends the test process.
+// FCL answers, the answer is FCL's; and the drop-in's own guards against FCL's failures that do
+// not depend on the pose. Each case below aborted, crashed or went unanswered in FCL 0.7 itself
+// (benchmarks/results/python-compat/): a regression here ends the test process.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -164,6 +165,49 @@ TEST(FclGuarded, BadInputThrows) {
   EXPECT_THROW(distance(box, at(0, INFINITY), box, at(0), true), kdet_fcl::InvalidInputError);
   EXPECT_THROW(distance(fcl::Sphered(1), at(NAN), fcl::Sphered(1), at(0), true),
                kdet_fcl::InvalidInputError);
+}
+
+TEST(FclGuarded, TheDropInNoLongerReachesFclsCrashesByType) {
+  // The failures FCL 0.7 has whatever the pose, in kdet_fcl::collide and kdet_fcl::distance
+  // themselves (the drop-in; the LD_PRELOAD interposer's collide): a Convex-Plane collide under
+  // GST_LIBCCD segfaulted and now runs under GST_INDEP, which answers it; a distance to a
+  // Halfspace or Plane segfaulted under GST_LIBCCD (a manager's distance with a ground plane in
+  // it, too) and answers wrongly under GST_INDEP: UnsupportedQueryError for both.
+  const auto c = cube();
+  const fcl::Planed plane(fcl::Vector3d(0, 0, 1), 0);
+  const fcl::Halfspaced half(fcl::Vector3d(0, 0, 1), 0);
+  const fcl::Boxd box(1, 1, 1);
+  const auto mesh = kdet_fcl_test::makeModel<fcl::BVHModel<fcl::OBBRSSd>>(
+      kdet_fcl::makeSphere<double>({0, 0, 0}, 0.5, 12, 6));
+  for (double z : {0.3, 2.0}) {
+    fcl::CollisionRequestd request(1, true), indep(1, true);
+    indep.gjk_solver_type = fcl::GST_INDEP;
+    fcl::CollisionResultd ours, theirs;
+    EXPECT_EQ(kdet_fcl::collide(c.get(), at(0, 0, z), &plane, at(0), request, ours),
+              fcl::collide(c.get(), at(0, 0, z), &plane, at(0), indep, theirs));
+    EXPECT_EQ(ours.isCollision(), z < 0.5) << z;
+    fcl::CollisionResultd mirrored;
+    EXPECT_EQ(kdet_fcl::collide(&plane, at(0), c.get(), at(0, 0, z), request, mirrored),
+              ours.numContacts());
+  }
+  const fcl::CollisionGeometryd* unbounded[] = {&plane, &half};
+  const fcl::CollisionGeometryd* others[] = {&box, c.get(), mesh.get()};
+  for (const fcl::CollisionGeometryd* u : unbounded)
+    for (const fcl::CollisionGeometryd* o : others)
+      for (auto solver : {fcl::GST_LIBCCD, fcl::GST_INDEP}) {
+        fcl::DistanceRequestd request;
+        request.gjk_solver_type = solver;
+        fcl::DistanceResultd result;
+        EXPECT_THROW(kdet_fcl::distance(o, at(0, 0, 3), u, at(0), request, result),
+                     kdet_fcl::UnsupportedQueryError);
+        EXPECT_THROW(kdet_fcl::distance(u, at(0), o, at(0, 0, 3), request, result),
+                     kdet_fcl::UnsupportedQueryError);
+      }
+  // Shapes FCL answers keep FCL's answer.
+  fcl::DistanceRequestd request;
+  fcl::DistanceResultd a, b;
+  EXPECT_EQ(kdet_fcl::distance(&box, at(3), c.get(), at(0), request, a),
+            fcl::distance(&box, at(3), c.get(), at(0), request, b));
 }
 
 TEST(FclGuarded, ModelsThatAreNotBuiltThrowInsteadOfReachingFcl) {

@@ -8,8 +8,9 @@
 /// OT_BVH` and `getModelType() == BVH_MODEL_TRIANGLES`): an `fcl::BVHModel<BV>` of any BV type
 /// FCL has (AABB, OBB, RSS, kIOS, OBBRSS, KDOP<16|18|24>) or a kdet_fcl::Mesh<S>, in any mix of
 /// BV types (FCL itself refuses mixed pairs). Every other pair (shapes, octrees) is forwarded to
-/// `fcl::collide` unchanged, except a point-cloud BVHModel (vertices without triangles), which
-/// FCL 0.7 crashes on in every query: UnsupportedQueryError.
+/// `fcl::collide` unchanged, except where FCL 0.7 crashes whatever the pose: a point-cloud
+/// BVHModel (vertices without triangles; UnsupportedQueryError) and a Convex against a Plane
+/// under GST_LIBCCD (libccd's test segfaults; it runs under GST_INDEP).
 ///
 /// Result conventions on the kDet path (FCL's, fcl-notes §1.5):
 ///  - one fcl::Contact per intersecting triangle pair (closed triangles, decided exactly: touching
@@ -107,7 +108,9 @@ std::size_t selfCollide(const fcl::CollisionGeometry<S>* o, const fcl::Transform
                         const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result);
 
 /// FCL's `distance`: forwarded to fcl::distance (a kdet_fcl::Mesh in MeshMode::KdetOnly gets its
-/// FCL hierarchy refitted first). Throws InvalidInputError for a non-finite pose.
+/// FCL hierarchy refitted first). Throws InvalidInputError for a null geometry, a non-finite pose
+/// or an unbuilt model, and UnsupportedQueryError for a distance to a Halfspace or Plane (FCL 0.7
+/// segfaults on it under GST_LIBCCD and answers it wrongly under GST_INDEP) or a point cloud.
 template <typename S>
 S distance(const fcl::CollisionObject<S>* o1, const fcl::CollisionObject<S>* o2,
            const fcl::DistanceRequest<S>& request, fcl::DistanceResult<S>& result);

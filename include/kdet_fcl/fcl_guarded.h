@@ -23,8 +23,9 @@
 ///    and asserts deeper than 0). Two meshes: the unsigned distance (FCL's has no sign). Two
 ///    spheres: closed form (FCL's hangs on coincident centres);
 ///  - FCL's exceptions (e.g. "Error with configuration") become UnsupportedQueryError.
-/// kdet_fcl::collide and kdet_fcl::distance keep FCL's own behaviour; the Python API
-/// (kdet_fcl.fcl) runs on these.
+/// kdet_fcl::collide and kdet_fcl::distance keep FCL's own behaviour except for FCL's failures
+/// that do not depend on the pose (Convex-Plane under GST_LIBCCD runs on GST_INDEP; a distance to
+/// a Halfspace or Plane throws UnsupportedQueryError); the Python API (kdet_fcl.fcl) runs on these.
 
 #include <cstddef>
 

@@ -26,6 +26,7 @@
 #include "cpu/parallel.h"
 #include "fcl/checksum.h"
 #include "fcl/mesh_cache.h"
+#include "fcl/prepare_fcl_query.h"
 #include "fcl/triangle_contact.h"
 #include "kdet_fcl/detail/pose.h"
 #include "kdet_fcl/errors.h"
@@ -516,6 +517,12 @@ std::size_t collide(const fcl::CollisionGeometry<S>* o1, const fcl::Transform3<S
   if ((bvh1 && empty(v1)) || (bvh2 && empty(v2))) return result.numContacts();
   prepareForFcl(o1, "collide");
   prepareForFcl(o2, "collide");
+  if (request.gjk_solver_type == fcl::GST_LIBCCD &&
+      detail::libccdCollideCrashes(o1->getNodeType(), o2->getNodeType())) {
+    fcl::CollisionRequest<S> indep = request;  // libccd's test segfaults; FCL's other one answers
+    indep.gjk_solver_type = fcl::GST_INDEP;
+    return fcl::collide(o1, tf1, o2, tf2, indep, result);
+  }
   return fcl::collide(o1, tf1, o2, tf2, request, result);
 }
 
@@ -580,6 +587,11 @@ S distance(const fcl::CollisionGeometry<S>* o1, const fcl::Transform3<S>& tf1,
   requireFinite(tf2, "distance");
   prepareForFcl(o1, "distance");
   prepareForFcl(o2, "distance");
+  if (detail::distanceToUnboundedShape(o1->getNodeType(), o1->getObjectType(), o2->getNodeType(),
+                                       o2->getObjectType()))
+    throw UnsupportedQueryError(
+        "kdet_fcl::distance: a distance to a Halfspace or Plane, which FCL 0.7 answers with a "
+        "segfault under GST_LIBCCD (its default) and wrongly under GST_INDEP");
   return fcl::distance(o1, tf1, o2, tf2, request, result);
 }
 

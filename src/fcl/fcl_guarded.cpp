@@ -44,12 +44,18 @@ std::string pairName(const Geometry* a, const Geometry* b) {
   return nodeName(a->getNodeType()) + " and " + nodeName(b->getNodeType());
 }
 
-/// Whether FCL's table of a solver's functions has one for the pair (looked up as FCL does).
+/// Whether FCL's table of a solver's functions has one for a pair of these node and object types
+/// (looked up as FCL does).
+template <class Table>
+bool inTable(const Table& table, fcl::NODE_TYPE na, fcl::OBJECT_TYPE oa, fcl::NODE_TYPE nb,
+             fcl::OBJECT_TYPE ob) {
+  if (oa == fcl::OT_GEOM && ob == fcl::OT_BVH) return table[nb][na];
+  return table[na][nb];
+}
 template <class Table>
 bool inTable(const Table& table, const Geometry* a, const Geometry* b) {
-  const fcl::NODE_TYPE na = a->getNodeType(), nb = b->getNodeType();
-  if (a->getObjectType() == fcl::OT_GEOM && b->getObjectType() == fcl::OT_BVH) return table[nb][na];
-  return table[na][nb];
+  return inTable(table, a->getNodeType(), a->getObjectType(), b->getNodeType(),
+                 b->getObjectType());
 }
 
 /// FCL 0.7's answer, with its exceptions (such as "Error with configuration" from the signed
@@ -71,13 +77,19 @@ void requireGeometries(const Geometry* a, const Geometry* b, const char* what) {
   if (a == nullptr || b == nullptr) throw InvalidInputError(std::string(what) + ": null geometry");
 }
 
+/// Whether FCL 0.7 lists a distance for a pair of these types (either solver's table: they list
+/// the same pairs; for float geometries too: the tables are registered by node type alike).
+bool hasDistance(fcl::NODE_TYPE na, fcl::OBJECT_TYPE oa, fcl::NODE_TYPE nb, fcl::OBJECT_TYPE ob) {
+  return inTable(fcl::getDistanceFunctionLookTable<fcl::detail::GJKSolver_indep<double>>()
+                     .distance_matrix, na, oa, nb, ob);
+}
+
 /// Checks that FCL 0.7 has a distance for a and b that neither crashes nor answers wrongly.
 void checkDistance(const Geometry* a, const Geometry* b) {
-  // Either solver's table: they list the same pairs.
-  if (!inTable(fcl::getDistanceFunctionLookTable<fcl::detail::GJKSolver_indep<double>>()
-                   .distance_matrix, a, b))  // FCL prints a warning and answers DBL_MAX
-    throw UnsupportedQueryError("FCL 0.7 has no distance for " + pairName(a, b));
-  if (unbounded(a->getNodeType()) || unbounded(b->getNodeType()))
+  if (!hasDistance(a->getNodeType(), a->getObjectType(), b->getNodeType(), b->getObjectType()))
+    throw UnsupportedQueryError("FCL 0.7 has no distance for " + pairName(a, b));  // DBL_MAX
+  if (detail::distanceToUnboundedShape(a->getNodeType(), a->getObjectType(), b->getNodeType(),
+                                       b->getObjectType()))
     throw UnsupportedQueryError("distance: FCL 0.7 crashes on " + pairName(a, b) +
                                 " with GST_LIBCCD and answers wrongly with GST_INDEP");
 }
@@ -97,6 +109,20 @@ double sphereSphereSigned(const fcl::Sphered& s1, const fcl::Transform3d& t1,
 }
 
 }  // namespace
+
+namespace detail {
+
+bool libccdCollideCrashes(fcl::NODE_TYPE a, fcl::NODE_TYPE b) {
+  return (a == fcl::GEOM_CONVEX && b == fcl::GEOM_PLANE) ||
+         (a == fcl::GEOM_PLANE && b == fcl::GEOM_CONVEX);
+}
+
+bool distanceToUnboundedShape(fcl::NODE_TYPE a, fcl::OBJECT_TYPE a_object, fcl::NODE_TYPE b,
+                              fcl::OBJECT_TYPE b_object) {
+  return (unbounded(a) || unbounded(b)) && hasDistance(a, a_object, b, b_object);
+}
+
+}  // namespace detail
 
 fcl::GJKSolverType guardedCollideSolver(const Geometry* a, const Geometry* b,
                                         fcl::GJKSolverType requested) {
@@ -118,9 +144,7 @@ fcl::GJKSolverType guardedCollideSolver(const Geometry* a, const Geometry* b,
     throw UnsupportedQueryError("collide: FCL 0.7 answers " + pairName(a, b) +
                                 " wrongly (overlapping ones are reported apart when contacts are "
                                 "asked for)");
-  if ((na == fcl::GEOM_CONVEX && nb == fcl::GEOM_PLANE) ||
-      (na == fcl::GEOM_PLANE && nb == fcl::GEOM_CONVEX))
-    return fcl::GST_INDEP;  // libccd's Convex-Plane test crashes
+  if (detail::libccdCollideCrashes(na, nb)) return fcl::GST_INDEP;  // libccd's test crashes
   return requested;
 }
 
