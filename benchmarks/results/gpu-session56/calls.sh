@@ -15,11 +15,9 @@
 set -uo pipefail
 cd "$(dirname "$0")/../../.."
 OUT="${OUT:-gpu-logs}"; mkdir -p "$OUT"
-DEBS="$PWD/.fcl-debs/root"; LIB="$DEBS/usr/lib/x86_64-linux-gnu"
+LIB="$PWD/.fcl-debs/root/usr/lib/x86_64-linux-gnu"
 case "${1:-}" in
-  check)
-    bash benchmarks/results/gpu-session49/next_check.sh check
-    tail -n 30 "$OUT/gpu_check.log" ;;
+  check) bash benchmarks/results/gpu-session53/calls.sh check ;;  # the same check as then
   range)
     export LD_LIBRARY_PATH="$LIB${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
     {
