@@ -4,7 +4,7 @@
 #                    scripts/gpu_check.sh with ctest -L cuda (with this session's scale ladder,
 #                    CudaQueryTyped.PairsAreTheSameAtEveryScaleOfTheExactRange, and the commit
 #                    refused for its scale), memcheck and gpu_bench on the cloth ball, into
-#                    $OUT/check (session 49's next_check.sh check)
+#                    $OUT/check (session 53's calls.sh check: session 49's next_check.sh check)
 #   calls.sh range   (the same machine; build-gpu reused) the CPU-side tests of the change on
 #                    the GPU machine: the bad-input, extremes, FCL collide and manager tests, into
 #                    $OUT/range.txt
