@@ -32,6 +32,7 @@ void validateMesh(const TriangleMesh<S>& mesh, bool require_triangles, bool rang
          << ", " << p.z << ")";
       throw InvalidInputError(os.str());
     }
+    if (!range) continue;
     const double m = std::fmax(std::fabs(double(p.x)),
                                std::fmax(std::fabs(double(p.y)), std::fabs(double(p.z))));
     if (m > largest) largest = m, at = i;

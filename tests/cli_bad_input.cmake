@@ -48,7 +48,7 @@ elseif(CASE STREQUAL "meshes")
   reject(inf.off "OFF\n3 1 0\n0 0 inf\n1 0 0\n0 1 0\n3 0 1 2\n" "inf|finite|coordinate")
   reject(overflow.obj "v 0 0 1e309\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" "finite")
   # Finite, but beyond the range where the hierarchy and the exact predicates hold (a query of
-  # such a mesh ran for hours before); the reader takes it, the commands refuse it.
+  # such a mesh did not finish before); the reader takes it, the commands refuse it.
   reject(scale.obj "v 0 0 1e200\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" "vertex 0.*2\\^330")
   reject(tiny.obj "v 0 0 1e-200\nv 1e-200 0 0\nv 0 1e-200 0\nf 1 2 3\n" "2\\^-247")
   reject(range.obj "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n" "out of range")

@@ -188,7 +188,7 @@ TYPED_TEST(BadInput, AFailedChangeKeepsTheHashedMeshAsItWas) {
 /// that has it, and a refused change leaves the HashedMesh as it was; both ends of the range are
 /// accepted and give the pairs of the unscaled mesh; the readers' and writers' validate() takes
 /// such meshes (files may hold them). Before, a pair of cubes at 1e154 or 1e-170 made a query run
-/// for hours and one at 1e150 or 1e-300 gave a wrong pair set (test_extremes.cpp's ladder).
+/// on past 5-20 s and one at 1e150 or 1e-300 gave a wrong pair set (test_extremes.cpp's ladder).
 TEST(BadInputRange, MeshesOutsideTheExactRangeAreRefusedWhereverTheyWouldBeQueried) {
   using S = double;
   const TriangleMesh<S> base = twoCrossing<S>();  // largest coordinate magnitude: 2 (vertex 1)

@@ -204,7 +204,7 @@ class BadInput(unittest.TestCase):
         self.assertInvalid(lambda: kdet_fcl.Mesh([[np.inf, 0, 0], [1, 0, 0], [0, 1, 0]],
                                                  [[0, 1, 2]]), "non-finite")
         # Beyond the range where the hierarchy and the exact predicates hold (a query of such a
-        # mesh ran for hours or answered wrongly before); its ends are fine.
+        # mesh did not finish or answered wrongly before); its ends are fine.
         self.assertInvalid(lambda: kdet_fcl.Mesh(V * 1e154, [[0, 1, 2]]), "2^330")
         self.assertInvalid(lambda: kdet_fcl.Mesh(V * 1e-170, [[0, 1, 2]]), "2^-247")
         kdet_fcl.Mesh(V * 2.0 ** 330, [[0, 1, 2]])
