@@ -2025,9 +2025,53 @@ std::uint64_t fingerprintOf(const TriangleMesh<S>& m) {
   return h;
 }
 
+/// The CUDA device the backend uses unless setDevice() chose one: KDET_FCL_CUDA_DEVICE (an
+/// ordinal, 0 to 1023; whether that device exists is checked where it is used), else 0.
+int deviceKnob() { return static_cast<int>(detail::numberKnob("KDET_FCL_CUDA_DEVICE", 0, 1023, 0)); }
+
+/// Throws InvalidInputError unless CUDA device `d` exists (`what` names where d came from).
+void checkDeviceOrdinal(int d, const std::string& what) {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess) {
+    (void)cudaGetLastError();
+    count = 0;
+  }
+  if (d < 0 || d >= count)
+    throw InvalidInputError(what + " names CUDA device " + std::to_string(d) + ", but this machine has " +
+                            std::to_string(count) + (count == 1 ? " device (0)" : " devices") +
+                            (count > 1 ? " (0.." + std::to_string(count - 1) + ")" : ""));
+}
+
+/// Makes the backend's device the calling thread's current CUDA device for its lifetime, and then
+/// gives the thread back the device it had: a library call must not move its caller's CUDA work
+/// to another GPU (the runtime's current device is per host thread, and cudaMalloc, kernel
+/// launches and events follow it). Restoring cannot throw; a failure there is cleared.
+class DeviceScope {
+ public:
+  explicit DeviceScope(int device) : device_(device) {
+    if (cudaGetDevice(&previous_) != cudaSuccess) {
+      (void)cudaGetLastError();
+      previous_ = -1;
+    }
+    if (previous_ != device_) CUDA_TRY(cudaSetDevice(device_));
+  }
+  DeviceScope(const DeviceScope&) = delete;
+  DeviceScope& operator=(const DeviceScope&) = delete;
+  ~DeviceScope() {
+    if (previous_ >= 0 && previous_ != device_ && cudaSetDevice(previous_) != cudaSuccess)
+      (void)cudaGetLastError();
+  }
+
+ private:
+  int device_;
+  int previous_ = -1;
+};
+
 struct Context {
   std::mutex mutex;
   bool ready = false;
+  /// The CUDA device of every stream, event and buffer below (-1: not chosen yet: chosen()).
+  int device = -1;
   cudaStream_t stream = nullptr;
   // A second stream for work that runs beside the stream's own (selfOverlap): forkSide() makes it
   // wait for everything queued on `stream` so far, joinSide() makes `stream` wait for it.
@@ -2077,9 +2121,21 @@ struct Context {
   DeviceBuffer<Vec3<float>>& mapped(float*) { return mapped_f; }
   DeviceBuffer<Vec3<double>>& mapped(double*) { return mapped_d; }
 
+  /// The backend's device: setDevice()'s choice, else deviceKnob()'s, which must exist. Called
+  /// under the mutex, before the DeviceScope of a call.
+  int chosen() {
+    if (device < 0) {
+      const int d = deviceKnob();
+      checkDeviceOrdinal(d, "KDET_FCL_CUDA_DEVICE=" + std::to_string(d));
+      device = d;
+    }
+    return device;
+  }
+
+  /// Creates the streams, events and fixed buffers on `device`, the thread's current device
+  /// (inside the call's DeviceScope).
   void init() {
     if (ready) return;
-    CUDA_TRY(cudaSetDevice(0));
     int least = 0, greatest = 0;
     CUDA_TRY(cudaDeviceGetStreamPriorityRange(&least, &greatest));
     CUDA_TRY(cudaStreamCreateWithPriority(&stream, cudaStreamNonBlocking, greatest));
@@ -2131,6 +2187,38 @@ struct Context {
     red_ready = false;
   }
 
+  /// Drops everything made on `device` (its caller holds the mutex and a DeviceScope of that
+  /// device), so that the next call initialises on another: every buffer and mesh, the streams,
+  /// the events and the pinned buffers, and what was asked of the device once. Never throws.
+  void teardown() noexcept {
+    if (ready) {
+      (void)cudaStreamSynchronize(stream);
+      (void)cudaStreamSynchronize(side);
+    }
+    releaseAll();
+    red.release();
+    pair_count.release();
+    host_small.release();
+    for (cudaEvent_t& e : ev) {
+      if (e != nullptr) (void)cudaEventDestroy(e);
+      e = nullptr;
+    }
+    for (cudaEvent_t e : round_ev) (void)cudaEventDestroy(e);
+    round_ev.clear();
+    for (cudaEvent_t* e : {&fork, &join, &counted}) {
+      if (*e != nullptr) (void)cudaEventDestroy(*e);
+      *e = nullptr;
+    }
+    for (cudaStream_t* st : {&stream, &side}) {
+      if (*st != nullptr) (void)cudaStreamDestroy(*st);
+      *st = nullptr;
+    }
+    (void)cudaGetLastError();
+    order_blocks_per_sm = -1;
+    last_host_pairs = 0;
+    ready = false;
+  }
+
   std::size_t bytes() const {
     std::size_t b = cub_temp.bytes() + red.bytes() + mapped_f.bytes() +
                     mapped_d.bytes() + cands.bytes() + pairs.bytes() + pairs_sorted.bytes() +
@@ -2163,7 +2251,7 @@ Context& context() {
   return *ctx;
 }
 
-int g_num_sms = 0;
+int g_num_sms = 0;  // of the context's device (0: not asked yet; guarded())
 
 /// Runs a CUB device algorithm: asks for its temporary storage, grows the shared buffer, runs.
 template <class F>
@@ -2983,7 +3071,7 @@ int fusedOrderBlocks() {
 int orderBlocksPerSm(Context& ctx) {
   if (ctx.order_blocks_per_sm < 0) {
     int coop = 0, per_sm = 0;
-    CUDA_TRY(cudaDeviceGetAttribute(&coop, cudaDevAttrCooperativeLaunch, 0));
+    CUDA_TRY(cudaDeviceGetAttribute(&coop, cudaDevAttrCooperativeLaunch, ctx.device));
     if (coop != 0)
       CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, orderPairsKernel,
                                                              kOrderBlock, 0));
@@ -3712,8 +3800,10 @@ struct WarpScanLaunch {
 template <class Kernel>
 unsigned int residentBlocks(Kernel* kernel, unsigned int all, int block = kQueryBlock,
                             std::size_t dynamic_smem = 0) {
-  static std::map<const void*, int> per_sm;
-  const void* key = reinterpret_cast<const void*>(kernel);
+  static std::map<std::pair<int, const void*>, int> per_sm;  // (device, kernel)
+  int device = 0;
+  CUDA_TRY(cudaGetDevice(&device));  // the context's (the call's DeviceScope)
+  const std::pair<int, const void*> key(device, reinterpret_cast<const void*>(kernel));
   auto it = per_sm.find(key);
   if (it == per_sm.end()) {
     int b = 0;
@@ -4298,6 +4388,7 @@ void readEveryKnob() {
     std::lock_guard<std::mutex> lock(checked_mutex);
     if (setting == checked) return;
   }
+  (void)deviceKnob();
   (void)syncRehash();
   (void)fullKeys();
   (void)rehashCap(1);
@@ -4355,9 +4446,11 @@ auto guarded(F&& f) -> decltype(f(std::declval<Context&>())) {
   readEveryKnob();
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
+  const DeviceScope scope(ctx.chosen());
   try {
     ctx.init();
-    if (g_num_sms == 0) CUDA_TRY(cudaDeviceGetAttribute(&g_num_sms, cudaDevAttrMultiProcessorCount, 0));
+    if (g_num_sms == 0)
+      CUDA_TRY(cudaDeviceGetAttribute(&g_num_sms, cudaDevAttrMultiProcessorCount, ctx.device));
     auto r = f(ctx);
     evict<float>(ctx);
     evict<double>(ctx);
@@ -4378,10 +4471,10 @@ auto guarded(F&& f) -> decltype(f(std::declval<Context&>())) {
 }
 
 /// Throws InvalidInputError unless the caller's pair buffer (of `capacity` pairs, > 0) is memory
-/// that the query's kernels may write on device 0: cudaMalloc'd or managed, and 8-byte aligned
-/// (unpackPairsKernel stores each pair as one uint2). Its size cannot be checked: the caller
-/// vouches for `capacity`, as for any CUDA copy.
-void checkDevicePairs(const TrianglePair* out, std::size_t capacity) {
+/// that the query's kernels may write on the backend's device `device`: cudaMalloc'd or managed,
+/// and 8-byte aligned (unpackPairsKernel stores each pair as one uint2). Its size cannot be
+/// checked: the caller vouches for `capacity`, as for any CUDA copy.
+void checkDevicePairs(const TrianglePair* out, std::size_t capacity, int device) {
   if (capacity == 0) return;
   if (reinterpret_cast<std::uintptr_t>(out) % alignof(uint2) != 0)
     throw InvalidInputError("the device pair buffer is not 8-byte aligned (cudaMalloc's is)");
@@ -4392,17 +4485,22 @@ void checkDevicePairs(const TrianglePair* out, std::size_t capacity) {
     throw InvalidInputError(std::string("the device pair buffer is not a pointer CUDA knows (") +
                             cudaGetErrorString(e) + ")");
   }
-  if ((at.type != cudaMemoryTypeDevice && at.type != cudaMemoryTypeManaged) || at.device != 0)
+  if (at.type != cudaMemoryTypeDevice && at.type != cudaMemoryTypeManaged)
     throw InvalidInputError(
-        "the device pair buffer is not device memory of CUDA device 0 (use cudaMalloc or "
-        "cudaMallocManaged; host memory takes intersectSelf/intersectMeshes)");
+        "the device pair buffer is not device memory (use cudaMalloc or cudaMallocManaged on "
+        "CUDA device " + std::to_string(device) + "; host memory takes intersectSelf/intersectMeshes)");
+  // (Managed memory is any device's.)
+  if (at.type == cudaMemoryTypeDevice && at.device != device)
+    throw InvalidInputError("the device pair buffer is memory of CUDA device " +
+                            std::to_string(at.device) + ", but the backend runs on device " +
+                            std::to_string(device) + " (setCudaDevice, KDET_FCL_CUDA_DEVICE)");
 }
 
 /// A query into the caller's device buffer: the buffer checked, then `run(ctx, &dev)`.
 template <class Run>
 auto intoDevice(TrianglePair* out, std::size_t capacity, Run&& run) {
   return guarded([&](Context& ctx) {
-    checkDevicePairs(out, capacity);
+    checkDevicePairs(out, capacity, ctx.device);
     DeviceOut dev{out, capacity, 0, {0, 0}};
     return run(ctx, &dev);
   });
@@ -4603,6 +4701,7 @@ std::unique_ptr<detail::CommitCopy> startCommitCopy(const HashedMesh<S>& mesh, c
     if (!m.valid || m.pending || m.nv != mesh.numVertices() || m.nv * sizeof(Vec3<S>) != bytes)
       return nullptr;
     try {
+      const DeviceScope scope(ctx.device);
       m.staging.reserve(bytes);  // (held already: the entry's uploads went through it)
     } catch (const CudaError&) {
       return nullptr;  // the next query meets the error
@@ -4626,6 +4725,8 @@ template <class S>
 std::vector<std::uint16_t> upperLevels(const HashedMesh<S>& mesh) {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
+  if (!ctx.ready) return {};
+  const DeviceScope scope(ctx.device);
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
     if (!settledEntryOf(m, mesh) || !m.upper_ready) continue;
     std::vector<std::uint32_t> words(upperWords(m.nt));
@@ -4645,6 +4746,8 @@ CellLayout cellLayout(const HashedMesh<S>& mesh) {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
   CellLayout out;
+  if (!ctx.ready) return out;
+  const DeviceScope scope(ctx.device);
   for (auto& m : ctx.meshes(static_cast<S*>(nullptr))) {
     if (!settledEntryOf(m, mesh)) continue;
     BuildInfo info;
@@ -4720,7 +4823,41 @@ std::size_t deviceBytesInUse() {
 void releaseDeviceMemory() {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
-  ctx.releaseAll();
+  if (!ctx.ready) {
+    ctx.releaseAll();  // (holds nothing on a device)
+    return;
+  }
+  try {
+    const DeviceScope scope(ctx.device);
+    ctx.releaseAll();
+  } catch (const CudaError&) {
+    ctx.releaseAll();  // the device could not be made current: free from here (cudaFree takes any)
+  }
+}
+
+void setDevice(int device) {
+  Context& ctx = context();
+  std::lock_guard<std::mutex> lock(ctx.mutex);
+  checkDeviceOrdinal(device, "setCudaDevice(" + std::to_string(device) + ")");
+  if (ctx.device == device) return;
+  if (ctx.ready) {
+    // Everything on the old device goes: the next call initialises on the new one, and each
+    // mesh is uploaded and hashed there again by its next query.
+    try {
+      const DeviceScope scope(ctx.device);
+      ctx.teardown();
+    } catch (const CudaError&) {
+      ctx.teardown();
+    }
+    g_num_sms = 0;
+  }
+  ctx.device = device;
+}
+
+int currentDevice() {
+  Context& ctx = context();
+  std::lock_guard<std::mutex> lock(ctx.mutex);
+  return ctx.chosen();
 }
 
 template QueryResult intersectMeshes(const HashedMesh<float>&, const HashedMesh<float>&,

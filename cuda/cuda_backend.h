@@ -26,6 +26,10 @@
 //
 // Thread safety: one mutex serialises all GPU queries of the process.
 //
+// Device: one CUDA device of the process (setDevice, kdet_fcl::setCudaDevice; until one is chosen,
+// KDET_FCL_CUDA_DEVICE=n, read at the first call, else 0). Every call makes it the calling
+// thread's current device while it runs and then gives the thread back its own.
+//
 // Knobs (environment, for tests and tuning): KDET_FCL_CUDA_PAIR_CAPACITY=k caps the first pass's
 // candidate and pair buffers at k (forces the overflow path); KDET_FCL_CUDA_TILE=1|4|8|16|32
 // sets the lanes per query triangle of the candidate search (default 8) and
@@ -170,13 +174,13 @@ constexpr int kCountOrderSegmentBits = 17;
 /// buffer always take one trip.
 constexpr std::size_t kOneTripMaxChunks = 4;
 
-/// intersectMeshes() on device 0. Throws CudaError on a CUDA failure (the device caches are then
+/// intersectMeshes() on the backend's device (setDevice). Throws CudaError on a CUDA failure (the device caches are then
 /// dropped, so a later call starts from scratch).
 template <class S>
 QueryResult intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b,
                             const QueryOptions& options);
 
-/// intersectSelf() on device 0.
+/// intersectSelf() on the backend's device.
 template <class S>
 QueryResult intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options);
 
@@ -191,7 +195,7 @@ void intersectMeshes(const HashedMesh<S>& a, const HashedMesh<S>& b, const Query
 template <class S>
 void intersectSelf(const HashedMesh<S>& mesh, const QueryOptions& options, QueryResult& out);
 
-/// intersectSelfOnDevice() on device 0: the pairs written to `out` (device memory, checked), at
+/// intersectSelfOnDevice() on the backend's device: the pairs written to `out` (device memory, checked), at
 /// most `capacity` of them; the count is of every pair found. It shares the mesh's kept result
 /// with intersectSelf (copied into `out` when it answers; the query that keeps one reads its
 /// pairs back).
@@ -199,13 +203,13 @@ template <class S>
 DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, const QueryOptions& options,
                                         TrianglePair* out, std::size_t capacity);
 
-/// intersectMeshesOnDevice() on device 0, as intersectSelfOnDevice.
+/// intersectMeshesOnDevice() on the backend's device, as intersectSelfOnDevice.
 template <class S>
 DevicePairsResult intersectMeshesOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
                                           const QueryOptions& options, TrianglePair* out,
                                           std::size_t capacity);
 
-/// intersectAllOnDevice()'s joint form on device 0: as intersectJoint (the same conditions,
+/// intersectAllOnDevice()'s joint form on the backend's device: as intersectJoint (the same conditions,
 /// false and nothing done when they do not hold), with the pairs left in `out` (device memory,
 /// checked): the first mesh's own pairs, then the second's, then those across, as many as fit.
 template <class S>
@@ -213,7 +217,7 @@ bool intersectJointOnDevice(const HashedMesh<S>& a, const HashedMesh<S>& b,
                             const QueryOptions& options, TrianglePair* out, std::size_t capacity,
                             AllDevicePairsResult* result);
 
-/// intersectAll()'s joint form on device 0. Returns false, doing nothing, unless it applies; the
+/// intersectAll()'s joint form on the backend's device. Returns false, doing nothing, unless it applies; the
 /// caller then runs the three queries. It applies when every pair is asked for (max_pairs 0),
 /// both meshes have triangles (together at most 150,000,000) and the inter query would decide on
 /// both meshes' own coordinates (their poses map one frame onto the other exactly:
@@ -429,6 +433,17 @@ std::string deviceMemoryReport();
 
 /// Frees every cached mesh and scratch buffer (the next query re-uploads what it needs).
 void releaseDeviceMemory();
+
+/// Makes CUDA device `device` the backend's (kdet_fcl::setCudaDevice): throws InvalidInputError
+/// unless it exists. A change drops everything the backend holds on the old device (meshes,
+/// buffers, streams), so that the next call starts on the new one. Every call of the backend
+/// makes its device the calling thread's current device for its duration and then gives the
+/// thread back its own (DeviceScope in cuda_backend.cu).
+void setDevice(int device);
+
+/// The backend's device: setDevice()'s choice, else KDET_FCL_CUDA_DEVICE, else 0 (throws
+/// InvalidInputError when that knob names a device that does not exist).
+int currentDevice();
 
 }  // namespace cuda
 }  // namespace kdet_fcl

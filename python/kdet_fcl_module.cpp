@@ -1273,6 +1273,13 @@ PYBIND11_MODULE(_kdet_fcl, m) {
   m.def("built_with_cuda", &builtWithCuda);
   m.def("cuda_device_count", &cudaDeviceCount);
   m.def("cuda_device_description", &cudaDeviceDescription, py::arg("device") = 0);
+  m.def("set_cuda_device", &setCudaDevice, py::arg("device"),
+        "Chooses the CUDA device of the GPU backend for the process (default: "
+        "KDET_FCL_CUDA_DEVICE, else 0). A query leaves the thread's current CUDA device as it "
+        "found it. InvalidInputError for a device that does not exist, BackendUnavailableError "
+        "without CUDA.");
+  m.def("cuda_device", &cudaDevice,
+        "The CUDA device the GPU backend uses (-1 without CUDA or a device).");
 
   bindFclCore(m);
 }

@@ -81,6 +81,30 @@ std::string cudaDeviceDescription(int device) {
 
 std::size_t autoCudaMinTriangles() { return kAutoCudaMinTriangles; }
 
+void setCudaDevice(int device) {
+  if (device < 0)
+    throw InvalidInputError("setCudaDevice(" + std::to_string(device) +
+                            "): a CUDA device ordinal is 0 or more");
+#if KDET_FCL_HAVE_CUDA
+  if (cudaDeviceCount() == 0)
+    throw BackendUnavailableError("setCudaDevice(" + std::to_string(device) +
+                                  "): there is no CUDA device: " + probe().error);
+  cuda::setDevice(device);
+#else
+  throw BackendUnavailableError("setCudaDevice(" + std::to_string(device) +
+                                "): kdet_fcl was built without CUDA");
+#endif
+}
+
+int cudaDevice() {
+#if KDET_FCL_HAVE_CUDA
+  if (cudaDeviceCount() == 0) return -1;
+  return cuda::currentDevice();
+#else
+  return -1;
+#endif
+}
+
 std::size_t cudaDeviceBytesInUse() {
 #if KDET_FCL_HAVE_CUDA
   try {

@@ -401,6 +401,7 @@ TEST(CudaQuery, EveryKnobRejectsAValueItDoesNotAcceptNamingTheVariable) {
   const std::vector<const char*> not_on_off = {"2", "yes", "off", "01", " 1"};
   const std::vector<const char*> powers = {"1", "2", "4", "8", "16", "32"};
   const Knob knobs[] = {
+      {"KDET_FCL_CUDA_DEVICE", {"0", "1", "1023"}, {"-1", "1024", "gpu1"}},
       {"KDET_FCL_CUDA_SYNC_REHASH", on_off, not_on_off},
       {"KDET_FCL_CUDA_FULL_KEYS", on_off, not_on_off},
       {"KDET_FCL_CUDA_REHASH_GRAPH", on_off, not_on_off},

@@ -42,6 +42,24 @@ Backend resolveBackend(Backend requested, std::size_t work_triangles = 0);
 /// query. Never throws.
 std::size_t cudaDeviceBytesInUse();
 
+/// Chooses the CUDA device that Backend::Cuda (and Auto's GPU queries) run on, for the whole
+/// process. Until a call chooses, the backend uses the device named by the environment variable
+/// KDET_FCL_CUDA_DEVICE (an ordinal), else device 0. Choosing another device than the one in use
+/// frees everything the backend holds on the old one; each mesh is uploaded and hashed on the new
+/// device by its next GPU query. Whatever the device, a query leaves the calling thread's current
+/// CUDA device (cudaSetDevice) as it found it, so the backend can share a process and a thread
+/// with other CUDA code on any GPU. Device buffers given to the *OnDevice queries must be memory
+/// of the chosen device. Thread-safe (waits for a query in flight).
+/// Throws InvalidInputError when `device` is negative or not below cudaDeviceCount(), and
+/// BackendUnavailableError when the library was built without CUDA or no device is usable.
+void setCudaDevice(int device);
+
+/// The CUDA device the backend uses (or will use at its first GPU query): the one
+/// setCudaDevice() chose, else KDET_FCL_CUDA_DEVICE's, else 0; -1 when the library was built
+/// without CUDA or no device is usable. Throws InvalidInputError when KDET_FCL_CUDA_DEVICE is
+/// not an ordinal of an existing device (a query would fail the same way).
+int cudaDevice();
+
 /// The smallest query (triangles of both meshes together) that Backend::Auto sends to the GPU:
 /// the measured break-even against the CPU backend (benchmarks/RESULTS-gpu.md).
 std::size_t autoCudaMinTriangles();

@@ -132,8 +132,9 @@ struct DevicePairsResult {
 };
 
 /// For GPU consumers (a simulation whose state lives on the device): intersectSelf on the CUDA
-/// backend, with the pairs written to `device_pairs`, device memory of CUDA device 0 that the
-/// caller owns (cudaMalloc or managed memory), instead of a host vector. The pairs are the same
+/// backend, with the pairs written to `device_pairs`, device memory of the backend's CUDA device
+/// (cudaDevice(): 0 unless setCudaDevice or KDET_FCL_CUDA_DEVICE chose another) that the caller
+/// owns (cudaMalloc or managed memory), instead of a host vector. The pairs are the same
 /// as intersectSelf's with Backend::Cuda, in the same order (sorted by (a, b)); they are in
 /// place when the call returns (the library's stream has finished), so any stream may read them.
 /// No copy to the host is made, which saves the read-back of the pairs (H100: 0.07 ms of the
@@ -144,7 +145,8 @@ struct DevicePairsResult {
 /// device copy of as many as fit; nothing when a rigid mesh has no self pairs, its usual case).
 /// `device_pairs` may be null when `capacity` is 0 (the count alone). Throws InvalidInputError
 /// when options.backend is Backend::Cpu (Auto and Cuda both mean the GPU here), when
-/// device_pairs is null with a non-zero capacity or is not device memory, and
+/// device_pairs is null with a non-zero capacity or is not device memory (or another device's),
+/// and
 /// BackendUnavailableError without a CUDA build or device, as Backend::Cuda does.
 template <class S>
 DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, TrianglePair* device_pairs,

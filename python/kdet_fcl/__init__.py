@@ -33,6 +33,7 @@ from ._kdet_fcl import (  # noqa: F401
     brute_force_intersect,
     brute_force_intersect_self,
     built_with_cuda,
+    cuda_device,
     cuda_device_count,
     cuda_device_description,
     intersect,
@@ -42,6 +43,7 @@ from ._kdet_fcl import (  # noqa: F401
     make_draped_cloth,
     make_sphere,
     read_mesh,
+    set_cuda_device,
     write_mesh,
 )
 
@@ -49,6 +51,7 @@ __all__ = [
     "Mesh", "MeshF32", "intersect", "intersect_self", "intersect_all", "intersects",
     "brute_force_intersect", "brute_force_intersect_self", "analyze_kfree", "read_mesh",
     "write_mesh", "make_sphere", "make_draped_cloth", "built_with_cuda", "cuda_device_count", "cuda_device_description",
+    "cuda_device", "set_cuda_device",
     "cuda_available", "Error", "InvalidInputError", "MeshFileError",
     "BackendUnavailableError", "CudaError", "UnsupportedQueryError",
 ]

@@ -287,6 +287,24 @@ class Cuda(unittest.TestCase):
             # auto falls back to the CPU.
             np.testing.assert_array_equal(kdet_fcl.intersect(a, b, backend="auto"), cpu)
 
+    def test_the_cuda_device_is_chosen_or_refused(self):
+        with self.assertRaises(kdet_fcl.InvalidInputError):
+            kdet_fcl.set_cuda_device(-1)
+        n = kdet_fcl.cuda_device_count()
+        if not kdet_fcl.cuda_available():
+            self.assertEqual(kdet_fcl.cuda_device(), -1)
+            with self.assertRaises(kdet_fcl.BackendUnavailableError):
+                kdet_fcl.set_cuda_device(0)
+            return
+        with self.assertRaisesRegex(kdet_fcl.InvalidInputError, "this machine has %d" % n):
+            kdet_fcl.set_cuda_device(n)
+        m = kdet_fcl.Mesh(*M.folded_cloth(24))
+        want = M.pair_set(kdet_fcl.intersect_self(m))
+        for d in (n - 1, 0):  # the last device, then device 0 again
+            kdet_fcl.set_cuda_device(d)
+            self.assertEqual(kdet_fcl.cuda_device(), d)
+            self.assertEqual(M.pair_set(kdet_fcl.intersect_self(m, backend="cuda")), want)
+
 
 ALL = 10 ** 9
 

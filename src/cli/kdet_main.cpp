@@ -79,7 +79,8 @@ const char* kMainHelp =
     "Exit codes: 0 success, 1 error, 2 usage error.\n";
 
 const char* kDemoHelp =
-    "usage: kdet demo [--n N] [--threads T] [--frames F] [--backend B] [--double|--float]\n"
+    "usage: kdet demo [--n N] [--threads T] [--frames F] [--backend B] [--device D]\n"
+    "                 [--double|--float]\n"
     "\n"
     "A cloth of N x N quads (2 N^2 triangles) draped over a sphere, both procedural (no data\n"
     "files). Prints triangle counts, hierarchy statistics, the cloth-sphere, cloth-self and\n"
@@ -90,6 +91,7 @@ const char* kDemoHelp =
     "  --frames F    animate the drape over F frames, re-hashing the cloth each frame (default 1)\n"
     "  --backend B   cpu (default), cuda (the GPU; an error without one) or auto (the GPU when\n"
     "                there is one and the scene is large enough to pay)\n"
+    "  --device D    the CUDA device of the GPU's queries (default: KDET_FCL_CUDA_DEVICE, else 0)\n"
     "  --double      double precision (default)\n"
     "  --float       single precision\n"
     "\n"
@@ -112,6 +114,8 @@ const char* kCollideHelp =
     "  --threads T                  worker threads (0: all)\n"
     "  --backend B                  cpu (default), cuda (the GPU) or auto (the GPU when\n"
     "                               there is one and the meshes are large enough to pay)\n"
+    "  --device D                   the CUDA device of a GPU query (default:\n"
+    "                               KDET_FCL_CUDA_DEVICE, else 0)\n"
     "  --pairs FILE                 write the pairs, sorted, one 'i j' per line, to FILE\n"
     "  --print-pairs                print the pairs, sorted, to stdout\n"
     "  --double | --float           precision (default double)\n";
@@ -125,6 +129,8 @@ const char* kSelfHelp =
     "  --threads T          worker threads (0: all)\n"
     "  --backend B          cpu (default), cuda (the GPU) or auto (the GPU when there is one\n"
     "                       and the mesh is large enough to pay)\n"
+    "  --device D           the CUDA device of a GPU query (default: KDET_FCL_CUDA_DEVICE,\n"
+    "                       else 0)\n"
     "  --pairs FILE         write the pairs, sorted, one 'i j' per line, to FILE\n"
     "  --print-pairs        print the pairs, sorted, to stdout\n"
     "  --double | --float   precision (default double)\n";
@@ -144,8 +150,9 @@ const char* kAnalyzeHelp =
 const char* kInfoHelp =
     "usage: kdet info\n"
     "\n"
-    "The version, whether this build has the CUDA backend, the usable CUDA devices (the library\n"
-    "uses device 0), and the smallest query --backend auto sends to the GPU.\n";
+    "The version, whether this build has the CUDA backend, the usable CUDA devices (the one the\n"
+    "library uses marked: KDET_FCL_CUDA_DEVICE, else 0), and the smallest query --backend auto\n"
+    "sends to the GPU.\n";
 
 // ---------------------------------------------------------------------------------------------
 // Argument parsing.
@@ -227,6 +234,7 @@ struct Common {
   bool use_float = false;
   int threads = 0;
   Backend backend = Backend::Cpu;
+  int device = -1;  ///< --device: the CUDA device of GPU queries (-1: the library's choice)
   bool help = false;
 
   /// Consumes a common option; false when `opt` is none of them.
@@ -241,6 +249,8 @@ struct Common {
       help = true;
     else if (opt == "--backend")
       backend = parseBackend(a.value(opt), a);
+    else if (opt == "--device")
+      device = static_cast<int>(a.integer(opt, 0, 1023));
     else
       return false;
     return true;
@@ -274,8 +284,19 @@ RunsOn runsOn(const Common& c, std::size_t work) {
   } catch (const BackendUnavailableError& e) {
     throw BackendUnavailableError(std::string("--backend cuda: ") + e.what());
   }
-  r.text = r.gpu() ? "cuda, " + cudaDeviceDescription(0)
-                   : "cpu, " + std::to_string(c.resolvedThreads()) + " threads";
+  if (r.gpu() && c.device >= 0) {
+    try {
+      setCudaDevice(c.device);
+    } catch (const InvalidInputError& e) {
+      throw UsageError(std::string("option --device: ") + e.what());
+    }
+  }
+  if (r.gpu()) {
+    const int d = cudaDevice();
+    r.text = "cuda, device " + std::to_string(d) + ": " + cudaDeviceDescription(d);
+  } else {
+    r.text = "cpu, " + std::to_string(c.resolvedThreads()) + " threads";
+  }
   return r;
 }
 
@@ -692,9 +713,17 @@ int cmdInfo(Args& a) {
   std::printf("CUDA backend: %s\n", builtWithCuda() ? "built" : "not built (no nvcc at build time)");
   const int devices = cudaDeviceCount();
   std::printf("CUDA devices: %d\n", devices);
+  int used = -1;
+  std::string device_error;
+  try {
+    used = devices > 0 ? cudaDevice() : -1;
+  } catch (const InvalidInputError& e) {
+    device_error = e.what();  // a KDET_FCL_CUDA_DEVICE that names no device: said below
+  }
   for (int d = 0; d < devices; ++d)
     std::printf("  device %d: %s%s\n", d, cudaDeviceDescription(d).c_str(),
-                d == 0 ? " (used)" : "");
+                d == used ? " (used)" : "");
+  if (!device_error.empty()) std::printf("CUDA device: none usable: %s\n", device_error.c_str());
   std::printf("--backend auto: the GPU from %zu triangles%s\n", autoCudaMinTriangles(),
               devices > 0 ? "" : " (no device here: always the CPU)");
   const unsigned h = std::thread::hardware_concurrency();
