@@ -8,6 +8,9 @@
 #include <utility>
 #include <vector>
 
+#include <string>
+
+#include "kdet_fcl/backend.h"
 #include "kdet_fcl/query.h"
 #include "kdet_fcl/triangle_mesh.h"
 
@@ -45,6 +48,15 @@ std::vector<kdet_fcl::TrianglePair> selfFromPair(const kdet_fcl::TriangleMesh<S>
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
+}
+
+/// The GPU the CUDA backend runs on, for the reports: "device N: <name, capability, memory>"
+/// (kdet_fcl::cudaDevice(): setCudaDevice's, else KDET_FCL_CUDA_DEVICE's, else 0), or "none".
+/// Throws InvalidInputError where KDET_FCL_CUDA_DEVICE names no device.
+inline std::string backendGpu() {
+  const int d = kdet_fcl::cudaDevice();
+  return d < 0 ? std::string("none")
+               : "device " + std::to_string(d) + ": " + kdet_fcl::cudaDeviceDescription(d);
 }
 
 }  // namespace kdet_bench_util

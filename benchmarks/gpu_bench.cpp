@@ -750,7 +750,7 @@ std::string thousands(double v) {
 
 std::string markdown(const std::vector<Row>& rows, const std::string& device) {
   std::string md;
-  md += "Device: " + device + "\n\n";
+  md += "GPU: " + device + "\n\n";
   md += "| scene | triangles | kDet GPU ms | LBVH GPU ms | kDet vs LBVH | FCL OBBRSS ms | kDet vs FCL "
         "| kDet CPU 2T ms | kDet CPU 16T ms | pairs | agree | kDet GPU B/tri |\n";
   md += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|\n";
@@ -834,7 +834,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "gpu_bench: no CUDA device\n");
     return 1;
   }
-  const std::string device = cudaDeviceDescription(0);
+  // kDet's GPU (KDET_FCL_CUDA_DEVICE, else 0), and the LBVH on the same one.
+  std::string device;
+  try {
+    device = kdet_bench_util::backendGpu();
+    kdet_bvh::useDevice(kdet_fcl::cudaDevice());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "gpu_bench: %s\n", e.what());
+    return 1;
+  }
   std::printf("device: %s\n", device.c_str());
   std::fflush(stdout);
 

@@ -501,6 +501,7 @@ int bitsFor(std::uint64_t x) {
 }  // namespace
 
 void setTiming(bool on) { g_timer.on = on; }
+void useDevice(int device) { BVH_TRY(cudaSetDevice(device)); }
 void resetTimes() { g_timer.t = BvhTimes{}; }
 BvhTimes times() { return g_timer.t; }
 std::size_t scratchBytes() { return scratch().bytes(); }

@@ -53,6 +53,12 @@ void setTiming(bool on);
 void resetTimes();
 BvhTimes times();
 
+/// Makes CUDA device `device` the calling thread's current device, on which the baseline then
+/// allocates and runs (the benchmarks put it on kDet's, kdet_fcl::cudaDevice(), so that both
+/// methods share a GPU). Call it before the first GPU BVH, from the thread that runs them. Throws
+/// std::runtime_error with the CUDA error text when the runtime refuses.
+void useDevice(int device);
+
 /// Bytes of device memory held by the module's shared scratch (candidate/pair/sort buffers).
 std::size_t scratchBytes();
 /// Forces the next query's first pass to use buffers of at most k entries (tests the overflow

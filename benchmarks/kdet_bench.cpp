@@ -1101,7 +1101,7 @@ void writeGpuTable(std::ofstream& md, const std::vector<SceneResult>& res, GpuUp
   if (!any) return;
   md << "\n### GPU: kDet's CUDA backend against the GPU BVH baseline and FCL (same run; ms per frame, "
         "host timer)\n\n";
-  md << "GPU: " << kdet_fcl::cudaDeviceDescription(0) << ". Both GPU methods run every self and "
+  md << "GPU: " << kdet_bench_util::backendGpu() << ". Both GPU methods run every self and "
         "inter-object query of the frame in double (the scenes' precision) and read the pairs back "
      << (fresh_results ? "into new results (--fresh-results), "
                        : "into results kept from frame to frame, ")
@@ -1154,7 +1154,7 @@ void writeMarkdown(const std::vector<SceneResult>& res, const Options& o, const 
   md << "CPU: " << cpuModel() << ", " << std::thread::hardware_concurrency() << " hardware threads; "
      << "load average before: " << load_before << "; after: " << load_after << "  \n";
   md << "Date: " << nowUtc() << "; FCL " << FCL_VERSION << "; kdet_fcl built with CUDA: "
-     << (kdet_fcl::builtWithCuda() ? "yes" : "no") << "; GPU: " << kdet_fcl::cudaDeviceDescription(0)
+     << (kdet_fcl::builtWithCuda() ? "yes" : "no") << "; GPU: " << kdet_bench_util::backendGpu()
      << "; repetitions: " << o.reps
      << " timed after 1 warm-up (per-frame medians; scene values are means over the frames after the build frame)\n\n";
 
@@ -1248,7 +1248,7 @@ void writeJson(const std::vector<SceneResult>& res, const Options& o, const std:
      << ", \"load_before\": " << jstr(load_before) << ", \"load_after\": " << jstr(load_after)
      << ", \"fcl_version\": " << jstr(FCL_VERSION) << ", \"built_with_cuda\": "
      << (kdet_fcl::builtWithCuda() ? "true" : "false") << ", \"gpu\": "
-     << jstr(kdet_fcl::cudaDeviceDescription(0)) << ", \"quick\": " << (o.quick ? "true" : "false")
+     << jstr(kdet_bench_util::backendGpu()) << ", \"quick\": " << (o.quick ? "true" : "false")
      << ", \"timed_repetitions\": " << o.reps << ", \"units\": \"ms\"},\n  \"scenes\": [\n";
   for (std::size_t si = 0; si < res.size(); ++si) {
     const SceneResult& r = res[si];
@@ -1479,6 +1479,10 @@ int main(int argc, char** argv) {
   }
   try {
     if (!o.export_dir.empty()) return exportScenes(o);
+#if KDET_BENCH_GPU_BVH
+    // The GPU BVH on kDet's GPU (KDET_FCL_CUDA_DEVICE, else 0): both GPU methods share one.
+    if (kdet_fcl::cudaDeviceCount() > 0) kdet_bvh::useDevice(kdet_fcl::cudaDevice());
+#endif
     const std::string load_before = loadAvg();
     kb::SceneConfig cfg;
     cfg.quick = o.quick;

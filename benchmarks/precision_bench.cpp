@@ -735,7 +735,7 @@ int main(int argc, char** argv) {
     std::vector<Backend> backends = {Backend::Cpu};
     if (builtWithCuda() && cudaDeviceCount() > 0) {
       backends.push_back(Backend::Cuda);
-      env.gpu = cudaDeviceDescription(0);
+      env.gpu = kdet_bench_util::backendGpu();
       std::fprintf(stderr, "precision_bench: GPU: %s\n", env.gpu.c_str());
     } else {
       env.gpu = builtWithCuda() ? "skipped (no device)" : "skipped (built without CUDA)";

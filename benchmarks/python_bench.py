@@ -183,7 +183,9 @@ def main():
             cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
     except (OSError, StopIteration):
         pass
-    gpu = "; GPU: " + kdet_fcl.cuda_device_description() if GPU else ""
+    gpu = ("; GPU: device %d: %s" % (kdet_fcl.cuda_device(),
+                                     kdet_fcl.cuda_device_description(kdet_fcl.cuda_device()))
+           if GPU else "")
     print("CPU: %s, %d hardware threads%s; Python %s; medians of %d calls after a warm-up call\n"
           % (cpu, os.cpu_count() or 0, gpu, platform.python_version(), args.repeats))
     print("| scene | query | triangles | pairs (kDet / FCL) | kDet ms | FCL ms | FCL / kDet |")
