@@ -148,6 +148,12 @@ elseif(CASE STREQUAL "cuda")
     check_kdet(gpu cpu)
   else()
     check_kdet(gpu cuda)
+    # A KDET_FCL_CUDA_DEVICE that names no device: a notice, and the CPU backend answers.
+    run(nodev KDET_FCL_INTERPOSE_BACKEND=cuda KDET_FCL_CUDA_DEVICE=1023)
+    require("${nodev_err}" "KDET_FCL_CUDA_DEVICE=1023 names CUDA device 1023, but this machine has"
+            "a device that does not exist")
+    require("${nodev_err}" "the CPU backend runs instead" "a device that does not exist")
+    check_kdet(nodev cpu)
   endif()
 else()
   message(FATAL_ERROR "unknown CASE '${CASE}'")

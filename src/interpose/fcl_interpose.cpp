@@ -151,6 +151,14 @@ void configure() {
             "; the CPU backend runs instead");
         options.backend = kdet_fcl::Backend::Cpu;
         g_config.backend = "cpu";
+      } else if (kdet_fcl::cudaDeviceCount() > 0) {
+        try {
+          (void)kdet_fcl::cudaDevice();  // KDET_FCL_CUDA_DEVICE names a device that exists
+        } catch (const std::exception& e) {
+          say(std::string(e.what()) + "; the CPU backend runs instead");
+          options.backend = kdet_fcl::Backend::Cpu;
+          g_config.backend = "cpu";
+        }
       }
     } else {
       say("KDET_FCL_INTERPOSE_BACKEND='" + v + "' is not cpu, cuda or auto; using cpu");
