@@ -16,6 +16,10 @@
 #                    the commit before this change, the library's and benchmarks' sources) gpu_bench
 #                    of the cloth ball, GPU methods only, from the tree before (build-ab-before)
 #                    and this tree (build-ab-after), eight processes alternating, into $OUT/ab.csv
+#   calls.sh final   (nvidia-h200-x2, fresh, about 8 minutes) the final tree: scripts/gpu_check.sh
+#                    with ctest -L cuda (no sanitizer, no benchmark) into $OUT/final, then gpu_bench
+#                    on the cloth ball with KDET_FCL_CUDA_DEVICE=1 while nvidia-smi samples each
+#                    GPU's memory, into $OUT/device1.txt
 set -uo pipefail
 cd "$(dirname "$0")/../../.."
 OUT="${OUT:-gpu-logs}"; mkdir -p "$OUT"
@@ -121,5 +125,26 @@ for scene in sorted({r["scene"] for r in rows}):
 PY
     } > "$OUT/ab.txt" 2>&1
     cat "$OUT/ab.txt"; gzip -f "$OUT"/*.log ;;
-  *) echo "usage: calls.sh probe|check|devices|ab" >&2; exit 2 ;;
+  final)
+    OUT=$OUT/final CTEST_ALL=0 JOBS=32 \
+      TARGETS="test_cuda_device test_cuda_devices test_cuda_query test_cuda_bvh test_cuda_upload \
+        test_cuda_box_test test_cuda_warp_search test_cuda_predicates gpu_bench" \
+      timeout 500 scripts/gpu_check.sh > "$OUT/gpu_check-final.log" 2>&1
+    echo "gpu_check rc=$?" >> "$OUT/gpu_check-final.log"
+    {
+      ( for i in $(seq 1 60); do
+          nvidia-smi --query-gpu=index,memory.used --format=csv,noheader,nounits; sleep 0.5
+        done > build-gpu/smi.txt ) &
+      smi=$!
+      KDET_FCL_CUDA_DEVICE=1 KDET_FCL_DATA_DIR="$PWD/.gpu-data" build-gpu/benchmarks/gpu_bench \
+        --no-fcl --no-cpu --repeats 20 --only unc-cloth-ball 2>&1 | grep -E "^device|GPU:|x[0-9]"
+      echo "gpu_bench rc=${PIPESTATUS[0]}"
+      kill $smi 2>/dev/null; wait $smi 2>/dev/null
+      echo "== the most memory each GPU held while it ran (MiB, nvidia-smi every 0.5 s)"
+      awk -F', ' '{ if ($2 > m[$1]) m[$1] = $2 } END { for (g in m) print "GPU " g ": " m[g] }' \
+        build-gpu/smi.txt | sort
+    } > "$OUT/device1.txt" 2>&1
+    tail -n 6 "$OUT/gpu_check-final.log"; cat "$OUT/device1.txt"
+    gzip -f "$OUT"/final/*.log 2>/dev/null ;;
+  *) echo "usage: calls.sh probe|check|devices|ab|final" >&2; exit 2 ;;
 esac
