@@ -54,6 +54,7 @@
 #include "cuda_backend.h"
 #include "cuda_error.cuh"
 #include "device_hash.cuh"
+#include "device_scope.h"
 #include "staged_upload.h"
 #include "kdet_fcl/detail/aabb.h"
 #include "kdet_fcl/detail/enclosing_sphere.h"
@@ -2041,31 +2042,6 @@ void checkDeviceOrdinal(int d, const std::string& what) {
                             std::to_string(count) + (count == 1 ? " device (0)" : " devices") +
                             (count > 1 ? " (0.." + std::to_string(count - 1) + ")" : ""));
 }
-
-/// Makes the backend's device the calling thread's current CUDA device for its lifetime, and then
-/// gives the thread back the device it had: a library call must not move its caller's CUDA work
-/// to another GPU (the runtime's current device is per host thread, and cudaMalloc, kernel
-/// launches and events follow it). Restoring cannot throw; a failure there is cleared.
-class DeviceScope {
- public:
-  explicit DeviceScope(int device) : device_(device) {
-    if (cudaGetDevice(&previous_) != cudaSuccess) {
-      (void)cudaGetLastError();
-      previous_ = -1;
-    }
-    if (previous_ != device_) CUDA_TRY(cudaSetDevice(device_));
-  }
-  DeviceScope(const DeviceScope&) = delete;
-  DeviceScope& operator=(const DeviceScope&) = delete;
-  ~DeviceScope() {
-    if (previous_ >= 0 && previous_ != device_ && cudaSetDevice(previous_) != cudaSuccess)
-      (void)cudaGetLastError();
-  }
-
- private:
-  int device_;
-  int previous_ = -1;
-};
 
 struct Context {
   std::mutex mutex;
@@ -4638,6 +4614,13 @@ class DeviceCommitCopy final : public detail::CommitCopy {
       failed_ = true;  // not the next range: left to the query
       return;
     }
+    // (Called on the committing threads, the caller's among them: their own contexts stay.)
+    cudaError_t entered = cudaSuccess;
+    const DeviceScope scope(ctx_.device, &entered);
+    if (entered != cudaSuccess) {
+      failed_ = true;
+      return;
+    }
     if (staging::pinnedUploadRange(m_.v.data(), src_, bytes_, offset, offset + bytes,
                                    m_.staging.data(), ctx_.stream) != cudaSuccess) {
       (void)cudaGetLastError();
@@ -4653,7 +4636,9 @@ class DeviceCommitCopy final : public detail::CommitCopy {
     if (finished_) return;
     finished_ = true;
     // Every copy enqueued reads the buffer (or the stage): none may run after the commit.
-    if (cudaStreamSynchronize(ctx_.stream) != cudaSuccess) {
+    cudaError_t entered = cudaSuccess;
+    const DeviceScope scope(ctx_.device, &entered);
+    if (entered != cudaSuccess || cudaStreamSynchronize(ctx_.stream) != cudaSuccess) {
       (void)cudaGetLastError();  // a sticky error fails the next query, which drops everything
       failed_ = true;
     }

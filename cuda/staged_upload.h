@@ -52,6 +52,7 @@
 #include <vector>
 
 #include "cpu/worker_pool.h"
+#include "device_scope.h"
 #include "kdet_fcl/detail/knobs.h"
 
 namespace kdet_fcl {
@@ -155,13 +156,12 @@ inline std::shared_ptr<void> pinHostMemory(const void* src, std::size_t bytes) {
     device = 0;
   }
   // Unregistered in the device's context it was registered in, whatever the calling thread's
-  // current device; an error there is cleared, so that it never reaches a later check.
+  // (which keeps its own: cuda::DeviceScope); an error there is cleared, so that it never reaches
+  // a later check.
   return std::shared_ptr<void>(p, [device](void* q) {
-    int current = device;
-    if (cudaGetDevice(&current) != cudaSuccess) current = device;
-    if (current != device) (void)cudaSetDevice(device);
+    cudaError_t entered = cudaSuccess;
+    const cuda::DeviceScope scope(device, &entered);
     (void)cudaHostUnregister(q);
-    if (current != device) (void)cudaSetDevice(current);
     (void)cudaGetLastError();
   });
 }
@@ -222,7 +222,18 @@ inline cudaError_t stagedUpload(void* dst, const void* src, std::size_t bytes, v
   std::atomic<bool> failed{false};
   std::mutex error_mutex;
   cudaError_t error = cudaSuccess;
+  // A worker's CUDA calls go to the caller's device (cuda::DeviceScope: a fresh thread would
+  // otherwise make a context on device 0).
+  const int device = cuda::threadDevice();
   const std::function<void()> work = [&] {
+    cudaError_t entered = cudaSuccess;
+    const cuda::DeviceScope scope(device, &entered);
+    if (entered != cudaSuccess) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (error == cudaSuccess) error = entered;
+      failed = true;
+      return;
+    }
     while (!failed.load(std::memory_order_relaxed)) {
       const std::size_t c = next.fetch_add(1);
       if (c >= chunks) return;
@@ -362,7 +373,16 @@ cudaError_t pooledDownload(const T* src, std::size_t count, T* stage, cudaStream
   std::atomic<bool> failed{false};
   std::mutex error_mutex;
   cudaError_t error = cudaSuccess;
+  const int device = cuda::threadDevice();  // the workers' too (as stagedUpload's)
   const std::function<void()> work = [&] {
+    cudaError_t entered = cudaSuccess;
+    const cuda::DeviceScope scope(device, &entered);
+    if (entered != cudaSuccess) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (error == cudaSuccess) error = entered;
+      failed = true;
+      return;
+    }
     while (!failed.load(std::memory_order_relaxed)) {
       const std::size_t c = next.fetch_add(1);
       if (c >= chunks) return;

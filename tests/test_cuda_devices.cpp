@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "test_util.h"
 
 #if KDET_FCL_TEST_HAVE_CUDA
+#include <cuda.h>
 #include <cuda_runtime_api.h>
 
 #include "../cuda/cuda_backend.h"
@@ -86,6 +88,24 @@ struct PairBuffer {
     return out;
   }
 };
+
+/// Whether device d's primary context is active (cuDevicePrimaryCtxGetState, through the runtime:
+/// the test links no libcuda), or nullopt where the driver's call cannot be had. Creates no
+/// context.
+std::optional<bool> primaryContextActive(int d) {
+  void* fn = nullptr;
+  cudaDriverEntryPointQueryResult q = cudaDriverEntryPointSymbolNotFound;
+  if (cudaGetDriverEntryPointByVersion("cuDevicePrimaryCtxGetState", &fn, 7000, cudaEnableDefault,
+                                       &q) != cudaSuccess ||
+      q != cudaDriverEntryPointSuccess || fn == nullptr)
+    return std::nullopt;
+  unsigned int flags = 0;
+  int active = 0;
+  if (reinterpret_cast<CUresult (*)(CUdevice, unsigned int*, int*)>(fn)(d, &flags, &active) !=
+      CUDA_SUCCESS)
+    return std::nullopt;
+  return active != 0;
+}
 #endif
 
 }  // namespace
@@ -252,6 +272,38 @@ TEST(CudaDevices, ADeformingMeshCommittedFromAThreadOnAnotherDeviceStaysRight) {
   if (!m.hostPin().tried() || m.hostPin().pinned())
     EXPECT_GE(copies, 2);  // frames 5 and 6 at least (where the machine registers host memory)
   EXPECT_EQ(after, other);
+}
+
+// With the backend on device 1, nothing of the library makes a context on device 0 (about 500 MiB
+// there): not the calling thread, whose context the calls give back (here: none), and not the
+// library's worker threads, which copy the staged uploads and the pooled read-backs (forced here
+// by small chunks and four threads each) and whose first CUDA call would otherwise make one on
+// their default device 0 (session 57: gpu_bench on device 1 held 527 MiB on device 0). Needs a
+// process of its own, as ctest gives each test.
+TEST(CudaDevicesTwoGpus, TheBackendOnDevice1MakesNoContextOnDevice0) {
+  if (cudaDeviceCount() < 2) GTEST_SKIP() << "needs two CUDA devices";
+  const std::optional<bool> before = primaryContextActive(0);
+  if (!before) GTEST_SKIP() << "the driver's cuDevicePrimaryCtxGetState cannot be had";
+  if (*before) GTEST_SKIP() << "device 0 has a context already (run in a process of its own)";
+  setCudaDevice(1);
+  kdet_test::ScopedEnv pin("KDET_FCL_CUDA_PIN_VERTICES", "0");
+  kdet_test::ScopedEnv up("KDET_FCL_CUDA_UPLOAD_CHUNK", "4096");
+  kdet_test::ScopedEnv up_threads("KDET_FCL_CUDA_UPLOAD_THREADS", "4");
+  kdet_test::ScopedEnv down("KDET_FCL_CUDA_DOWNLOAD_CHUNK", "4096");
+  kdet_test::ScopedEnv down_threads("KDET_FCL_CUDA_DOWNLOAD_THREADS", "4");
+  HashedMesh<float> m = cloth(120);
+  QueryResult kept;
+  for (int frame = 0; frame < 3; ++frame) {
+    if (frame > 0) {
+      m.updateVertices(
+          makeDrapedCloth<float>(120, 2.0f, 0.6f, 0.05f, 0.4f + 0.1f * frame).vertices);
+    }
+    intersectSelf(m, kept, gpu());  // into a result kept from frame to frame: a pooled read-back
+    EXPECT_EQ(kept.pairs, cpuSelf(m)) << "frame " << frame;
+    EXPECT_GE(kept.pairs.size(), 4u * 4096 / sizeof(TrianglePair)) << "fewer than four chunks";
+  }
+  EXPECT_EQ(primaryContextActive(1), std::optional<bool>(true));
+  EXPECT_EQ(primaryContextActive(0), std::optional<bool>(false));
 }
 
 // setCudaDevice(1) moves the backend to device 1: what it held on device 0 is freed, each mesh is

@@ -20,6 +20,10 @@
 #                    with ctest -L cuda (no sanitizer, no benchmark) into $OUT/final, then gpu_bench
 #                    on the cloth ball with KDET_FCL_CUDA_DEVICE=1 while nvidia-smi samples each
 #                    GPU's memory, into $OUT/device1.txt
+#   calls.sh workers (nvidia-h200-x2, fresh, about 4 minutes) after the worker threads' scopes:
+#                    the library, test_cuda_devices, test_cuda_upload and gpu_bench alone; the
+#                    device tests and the upload tests under ctest, then gpu_bench on device 1
+#                    with nvidia-smi sampling each GPU's memory, into $OUT/workers.txt
 set -uo pipefail
 cd "$(dirname "$0")/../../.."
 OUT="${OUT:-gpu-logs}"; mkdir -p "$OUT"
@@ -146,5 +150,26 @@ PY
     } > "$OUT/device1.txt" 2>&1
     tail -n 6 "$OUT/gpu_check-final.log"; cat "$OUT/device1.txt"
     gzip -f "$OUT"/final/*.log 2>/dev/null ;;
-  *) echo "usage: calls.sh probe|check|devices|ab|final" >&2; exit 2 ;;
+  workers)
+    {
+      nvidia-smi -L
+      configure > "$OUT/configure.log" 2>&1 && echo "configured"
+      cmake --build build-gpu -j"$(nproc)" --target kdet_fcl test_cuda_devices test_cuda_upload \
+        gpu_bench > "$OUT/build.log" 2>&1 && echo "built"
+      ctest --test-dir build-gpu -R '^(CudaDevices[A-Za-z]*|StagedUpload|StagedDownload|PinnedUpload|PooledDownload)[.]' \
+        --output-on-failure 2>&1 | tail -n 12
+      ( for i in $(seq 1 60); do
+          nvidia-smi --query-gpu=index,memory.used --format=csv,noheader,nounits; sleep 0.5
+        done > build-gpu/smi.txt ) &
+      smi=$!
+      KDET_FCL_CUDA_DEVICE=1 KDET_FCL_DATA_DIR="$PWD/.gpu-data" build-gpu/benchmarks/gpu_bench \
+        --no-fcl --no-cpu --repeats 20 --only unc-cloth-ball 2>&1 | grep -E "^device|GPU:|x[0-9]"
+      echo "gpu_bench rc=${PIPESTATUS[0]}"
+      kill $smi 2>/dev/null; wait $smi 2>/dev/null
+      echo "== the most memory each GPU held while it ran (MiB, nvidia-smi every 0.5 s)"
+      awk -F', ' '{ if ($2 > m[$1]) m[$1] = $2 } END { for (g in m) print "GPU " g ": " m[g] }' \
+        build-gpu/smi.txt | sort
+    } > "$OUT/workers.txt" 2>&1
+    cat "$OUT/workers.txt"; gzip -f "$OUT"/*.log ;;
+  *) echo "usage: calls.sh probe|check|devices|ab|final|workers" >&2; exit 2 ;;
 esac
