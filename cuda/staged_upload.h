@@ -201,6 +201,37 @@ inline cudaError_t pinnedUpload(void* dst, const void* src, std::size_t bytes, v
   return pinnedUploadRange(dst, src, bytes, 0, bytes, stage, s);
 }
 
+/// The first CUDA error of a job that several threads share, and whether one was met (the others
+/// then stop taking chunks).
+struct JobError {
+  std::atomic<bool> failed{false};
+  std::mutex mutex;
+  cudaError_t first = cudaSuccess;
+  void record(cudaError_t e) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (first == cudaSuccess) first = e;
+    failed = true;
+  }
+};
+
+/// Runs `work` on `threads` threads of `pool` (the calling one among them), each on the calling
+/// thread's CUDA device (cuda::DeviceScope: a fresh worker's first CUDA call would otherwise make a
+/// context on device 0, whichever device the caller works on); a thread that cannot make it
+/// current records the error in `error` and leaves its share to the others.
+inline void runOnCallersDevice(cpu::WorkerPool& pool, int threads, JobError& error,
+                               const std::function<void()>& work) {
+  const int device = cuda::threadDevice();
+  pool.run(threads, [&] {
+    cudaError_t entered = cudaSuccess;
+    const cuda::DeviceScope scope(device, &entered);
+    if (entered != cudaSuccess) {
+      error.record(entered);
+      return;
+    }
+    work();
+  });
+}
+
 /// Copies `bytes` from pageable host memory `src` to device memory `dst` through the pinned
 /// buffer `stage` (at least `bytes` long), enqueueing the transfers on stream `s`. The stage must
 /// not be written again until those transfers have run (the caller synchronises `s` first).
@@ -219,36 +250,18 @@ inline cudaError_t stagedUpload(void* dst, const void* src, std::size_t bytes, v
   auto* h = static_cast<char*>(stage);
   const auto* from = static_cast<const char*>(src);
   std::atomic<std::size_t> next{0};
-  std::atomic<bool> failed{false};
-  std::mutex error_mutex;
-  cudaError_t error = cudaSuccess;
-  // A worker's CUDA calls go to the caller's device (cuda::DeviceScope: a fresh thread would
-  // otherwise make a context on device 0).
-  const int device = cuda::threadDevice();
-  const std::function<void()> work = [&] {
-    cudaError_t entered = cudaSuccess;
-    const cuda::DeviceScope scope(device, &entered);
-    if (entered != cudaSuccess) {
-      std::lock_guard<std::mutex> lock(error_mutex);
-      if (error == cudaSuccess) error = entered;
-      failed = true;
-      return;
-    }
-    while (!failed.load(std::memory_order_relaxed)) {
+  JobError error;
+  runOnCallersDevice(cpu::WorkerPool::shared(), threads, error, [&] {
+    while (!error.failed.load(std::memory_order_relaxed)) {
       const std::size_t c = next.fetch_add(1);
       if (c >= chunks) return;
       const std::size_t off = c * chunk, n = std::min(chunk, bytes - off);
       std::memcpy(h + off, from + off, n);
       const cudaError_t e = cudaMemcpyAsync(d + off, h + off, n, cudaMemcpyHostToDevice, s);
-      if (e != cudaSuccess) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (error == cudaSuccess) error = e;
-        failed = true;
-      }
+      if (e != cudaSuccess) error.record(e);
     }
-  };
-  cpu::WorkerPool::shared().run(threads, work);
-  return error;
+  });
+  return error.first;
 }
 
 /// The events of a download's chunks (downloadChunks). Destroyed on every way out (a pending
@@ -370,35 +383,21 @@ cudaError_t pooledDownload(const T* src, std::size_t count, T* stage, cudaStream
   ready();
   const std::size_t chunk = events->chunk, chunks = (count + chunk - 1) / chunk;
   std::atomic<std::size_t> next{0};
-  std::atomic<bool> failed{false};
-  std::mutex error_mutex;
-  cudaError_t error = cudaSuccess;
-  const int device = cuda::threadDevice();  // the workers' too (as stagedUpload's)
-  const std::function<void()> work = [&] {
-    cudaError_t entered = cudaSuccess;
-    const cuda::DeviceScope scope(device, &entered);
-    if (entered != cudaSuccess) {
-      std::lock_guard<std::mutex> lock(error_mutex);
-      if (error == cudaSuccess) error = entered;
-      failed = true;
-      return;
-    }
-    while (!failed.load(std::memory_order_relaxed)) {
+  JobError error;
+  runOnCallersDevice(pool, threads, error, [&] {
+    while (!error.failed.load(std::memory_order_relaxed)) {
       const std::size_t c = next.fetch_add(1);
       if (c >= chunks) return;
       const cudaError_t e = cudaEventSynchronize(events->ev[c]);
       if (e != cudaSuccess) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (error == cudaSuccess) error = e;
-        failed = true;
+        error.record(e);
         return;
       }
       const std::size_t off = c * chunk;
       place(off, static_cast<const T*>(stage + off), std::min(chunk, count - off));
     }
-  };
-  pool.run(threads, work);
-  return error;
+  });
+  return error.first;
 }
 
 /// Whether a download of `count` elements into destinations that hold `held` elements now (a

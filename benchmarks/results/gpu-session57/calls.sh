@@ -43,6 +43,24 @@ probe() {
     -lkdet_fcl -I/usr/local/cuda/include -L/usr/local/cuda/lib64 -lcudart -pthread \
     -Wl,-rpath,"$PWD/build-gpu" -o build-gpu/device_probe && build-gpu/device_probe
 }
+configure_build() {  # the GPUs, then build-gpu configured and the targets built
+  nvidia-smi -L
+  configure > "$OUT/configure.log" 2>&1 && echo "configured"
+  cmake --build build-gpu -j"$(nproc)" --target "$@" > "$OUT/build.log" 2>&1 && echo "built"
+}
+device1_bench() {  # gpu_bench on device 1 while nvidia-smi samples each GPU's memory
+  ( for i in $(seq 1 60); do
+      nvidia-smi --query-gpu=index,memory.used --format=csv,noheader,nounits; sleep 0.5
+    done > build-gpu/smi.txt ) &
+  local smi=$!
+  KDET_FCL_CUDA_DEVICE=1 KDET_FCL_DATA_DIR="$PWD/.gpu-data" build-gpu/benchmarks/gpu_bench \
+    --no-fcl --no-cpu --repeats 20 --only unc-cloth-ball 2>&1 | grep -E "^device|GPU:|x[0-9]"
+  echo "gpu_bench rc=${PIPESTATUS[0]}"
+  kill $smi 2>/dev/null; wait $smi 2>/dev/null
+  echo "== the most memory each GPU held while it ran (MiB, nvidia-smi every 0.5 s)"
+  awk -F', ' '{ if ($2 > m[$1]) m[$1] = $2 } END { for (g in m) print "GPU " g ": " m[g] }' \
+    build-gpu/smi.txt | sort
+}
 case "${1:-}" in
   probe)
     {
@@ -75,10 +93,7 @@ case "${1:-}" in
     gzip -f "$OUT"/check/*.log 2>/dev/null ;;
   devices)
     {
-      nvidia-smi -L
-      configure > "$OUT/configure.log" 2>&1 && echo "configured"
-      cmake --build build-gpu -j"$(nproc)" --target kdet_fcl test_cuda_devices kdet \
-        > "$OUT/build.log" 2>&1 && echo "built"
+      configure_build kdet_fcl test_cuda_devices kdet
       ctest --test-dir build-gpu -R 'CudaDevices' --output-on-failure 2>&1 | tail -n 12
       SAN="$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)"
       echo "== compute-sanitizer memcheck, test_cuda_devices"
@@ -136,39 +151,16 @@ PY
       timeout 500 scripts/gpu_check.sh > "$OUT/gpu_check-final.log" 2>&1
     echo "gpu_check rc=$?" >> "$OUT/gpu_check-final.log"
     {
-      ( for i in $(seq 1 60); do
-          nvidia-smi --query-gpu=index,memory.used --format=csv,noheader,nounits; sleep 0.5
-        done > build-gpu/smi.txt ) &
-      smi=$!
-      KDET_FCL_CUDA_DEVICE=1 KDET_FCL_DATA_DIR="$PWD/.gpu-data" build-gpu/benchmarks/gpu_bench \
-        --no-fcl --no-cpu --repeats 20 --only unc-cloth-ball 2>&1 | grep -E "^device|GPU:|x[0-9]"
-      echo "gpu_bench rc=${PIPESTATUS[0]}"
-      kill $smi 2>/dev/null; wait $smi 2>/dev/null
-      echo "== the most memory each GPU held while it ran (MiB, nvidia-smi every 0.5 s)"
-      awk -F', ' '{ if ($2 > m[$1]) m[$1] = $2 } END { for (g in m) print "GPU " g ": " m[g] }' \
-        build-gpu/smi.txt | sort
+      device1_bench
     } > "$OUT/device1.txt" 2>&1
     tail -n 6 "$OUT/gpu_check-final.log"; cat "$OUT/device1.txt"
     gzip -f "$OUT"/final/*.log 2>/dev/null ;;
   workers)
     {
-      nvidia-smi -L
-      configure > "$OUT/configure.log" 2>&1 && echo "configured"
-      cmake --build build-gpu -j"$(nproc)" --target kdet_fcl test_cuda_devices test_cuda_upload \
-        gpu_bench > "$OUT/build.log" 2>&1 && echo "built"
+      configure_build kdet_fcl test_cuda_devices test_cuda_upload gpu_bench
       ctest --test-dir build-gpu -R '^(CudaDevices[A-Za-z]*|StagedUpload|StagedDownload|PinnedUpload|PooledDownload)[.]' \
         --output-on-failure 2>&1 | tail -n 12
-      ( for i in $(seq 1 60); do
-          nvidia-smi --query-gpu=index,memory.used --format=csv,noheader,nounits; sleep 0.5
-        done > build-gpu/smi.txt ) &
-      smi=$!
-      KDET_FCL_CUDA_DEVICE=1 KDET_FCL_DATA_DIR="$PWD/.gpu-data" build-gpu/benchmarks/gpu_bench \
-        --no-fcl --no-cpu --repeats 20 --only unc-cloth-ball 2>&1 | grep -E "^device|GPU:|x[0-9]"
-      echo "gpu_bench rc=${PIPESTATUS[0]}"
-      kill $smi 2>/dev/null; wait $smi 2>/dev/null
-      echo "== the most memory each GPU held while it ran (MiB, nvidia-smi every 0.5 s)"
-      awk -F', ' '{ if ($2 > m[$1]) m[$1] = $2 } END { for (g in m) print "GPU " g ": " m[g] }' \
-        build-gpu/smi.txt | sort
+      device1_bench
     } > "$OUT/workers.txt" 2>&1
     cat "$OUT/workers.txt"; gzip -f "$OUT"/*.log ;;
   *) echo "usage: calls.sh probe|check|devices|ab|final|workers" >&2; exit 2 ;;
