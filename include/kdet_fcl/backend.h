@@ -46,10 +46,11 @@ std::size_t cudaDeviceBytesInUse();
 /// process. Until a call chooses, the backend uses the device named by the environment variable
 /// KDET_FCL_CUDA_DEVICE (an ordinal), else device 0. Choosing another device than the one in use
 /// frees everything the backend holds on the old one; each mesh is uploaded and hashed on the new
-/// device by its next GPU query. Whatever the device, a query leaves the calling thread's current
-/// CUDA device (cudaSetDevice) as it found it, so the backend can share a process and a thread
-/// with other CUDA code on any GPU. Device buffers given to the *OnDevice queries must be memory
-/// of the chosen device. Thread-safe (waits for a query in flight).
+/// device by its next GPU query. Whatever the device, a query leaves the calling thread's CUDA
+/// context (its current device, or none) as it found it, and the library's own threads make no
+/// context on another GPU, so the backend can share a process and a thread with other CUDA code
+/// on any GPU. Device buffers given to the *OnDevice queries must be memory of the chosen device.
+/// Thread-safe (waits for a query in flight).
 /// Throws InvalidInputError when `device` is negative or not below cudaDeviceCount(), and
 /// BackendUnavailableError when the library was built without CUDA or no device is usable.
 void setCudaDevice(int device);

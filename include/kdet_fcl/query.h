@@ -145,9 +145,8 @@ struct DevicePairsResult {
 /// device copy of as many as fit; nothing when a rigid mesh has no self pairs, its usual case).
 /// `device_pairs` may be null when `capacity` is 0 (the count alone). Throws InvalidInputError
 /// when options.backend is Backend::Cpu (Auto and Cuda both mean the GPU here), when
-/// device_pairs is null with a non-zero capacity or is not device memory (or another device's),
-/// and
-/// BackendUnavailableError without a CUDA build or device, as Backend::Cuda does.
+/// device_pairs is null with a non-zero capacity or is not device memory (or is another
+/// device's), and BackendUnavailableError without a CUDA build or device, as Backend::Cuda does.
 template <class S>
 DevicePairsResult intersectSelfOnDevice(const HashedMesh<S>& mesh, TrianglePair* device_pairs,
                                         std::size_t capacity, const QueryOptions& options = {});
