@@ -72,6 +72,15 @@ elseif(CASE STREQUAL "self_small")
   if(NOT pairs STREQUAL "0 1\n")
     message(FATAL_ERROR "self --pairs wrote '${pairs}', expected '0 1'")
   endif()
+  # A size ratio beyond 2^38 (a triangle of 2e12 over two of 1.4e-3 that cross it): the answer,
+  # with a note on stderr before the query that the small ones share level 0 (none within it).
+  file(WRITE "${WORK}/ratio.obj" "v -1e12 -1e12 0\nv 1e12 -1e12 0\nv 0 1e12 0\nv 0 0 -5e-4\nv 1e-3 0 5e-4\nv 0 1e-3 5e-4\nv 2e-3 0 -5e-4\nv 3e-3 0 5e-4\nv 2e-3 1e-3 5e-4\nf 1 2 3\nf 4 5 6\nf 7 8 9\n")
+  expect(CODE 0 OUT "self pairs: 2[^0-9]" ERR "note: .*ratio.obj: 2 of 3 triangles are smaller than the finest cell"
+         ARGS self "${WORK}/ratio.obj")
+  execute_process(COMMAND "${KDET}" self "${WORK}/crossing.obj" ERROR_VARIABLE err OUTPUT_QUIET)
+  if(err MATCHES "note:")
+    message(FATAL_ERROR "kdet self crossing.obj: a note where the size ratio is small:\n${err}")
+  endif()
 elseif(CASE STREQUAL "collide_small")
   file(WRITE "${WORK}/a.obj" "${tri_a}")
   file(WRITE "${WORK}/b.off" "${tri_b}")

@@ -191,6 +191,36 @@ TEST(Hierarchy, HugeSizeRatioHasTallHierarchyWithoutOverflow) {
   EXPECT_EQ(self.size(), 50u);
 }
 
+// Size ratios beyond 2^38 (docs/numerics.md section 1): the finest cell is the extent / 2^38, and
+// the triangles smaller than it are counted (HierarchyStats::below_cell0); within the range none
+// are, and a point-like triangle (size 0) never is. The pairs are the brute force's either way.
+TEST(Hierarchy, TrianglesBelowTheFinestCellAreCountedBeyondARatioOf2To38) {
+  auto scene = [](double big) {
+    TriangleMesh<double> m;
+    m.addTriangle({-big, -big, 0}, {big, -big, 0}, {0, big, 0});
+    for (int i = 0; i < 12; ++i) {  // tiny triangles of size ~1e-3 near the origin, crossing z = 0
+      const double x = 2e-3 * (i % 4), y = 2e-3 * (i / 4);
+      m.addTriangle({x, y, -5e-4}, {x + 1e-3, y, 5e-4}, {x, y + 1e-3, 5e-4});
+    }
+    m.addTriangle({5e-2, 5e-2, 1}, {5e-2, 5e-2, 1}, {5e-2, 5e-2, 1});  // a point
+    return m;
+  };
+  for (const double big : {1e3, 1e7}) {  // ratios about 1e6 and 1e10: within 2^38
+    HashedMesh<double> hm(scene(big));
+    EXPECT_EQ(hm.stats().below_cell0, 0u) << big;
+    EXPECT_EQ(kdet_test::sorted(intersectSelf(hm).pairs), bruteForceIntersectSelf(hm.mesh()));
+  }
+  for (const double big : {1e9, 1e12}) {  // ratios about 1e12 and 1e15: beyond 2^38 (2.7e11)
+    HashedMesh<double> hm(scene(big));
+    const HierarchyStats s = hm.stats();
+    EXPECT_EQ(s.below_cell0, 12u) << big;
+    EXPECT_GT(s.cell_size0, s.d_min) << big;
+    const auto self = kdet_test::sorted(intersectSelf(hm).pairs);
+    EXPECT_EQ(self, bruteForceIntersectSelf(hm.mesh())) << big;
+    EXPECT_EQ(self.size(), 12u) << big;  // each tiny triangle crosses the huge one
+  }
+}
+
 TEST(Hierarchy, PointLikeAndEmptyMeshes) {
   TriangleMesh<double> pts;
   pts.addTriangle({1, 1, 1}, {1, 1, 1}, {1, 1, 1});

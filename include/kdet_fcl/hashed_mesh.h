@@ -24,6 +24,11 @@ struct HierarchyStats {
   std::size_t cells = 0;         ///< occupied cells over all levels
   std::size_t entries = 0;       ///< (cell, triangle) entries
   std::size_t max_cell_load = 0; ///< most triangles in one cell
+  /// Triangles of positive size smaller than a level-0 cell. 0 unless the mesh's size ratio
+  /// exceeds what the cell keys hold: the finest cell is then the extent / 2^38, not d_min, so
+  /// these share level 0, and those close together are tested pairwise (a query can take
+  /// quadratic time in their number; docs/numerics.md section 1).
+  std::size_t below_cell0 = 0;
   std::size_t memory_bytes = 0;  ///< bytes held by the CPU hash and its rebuild buffers (not the mesh)
 };
 

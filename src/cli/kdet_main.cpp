@@ -333,6 +333,19 @@ void printHierarchy(const char* name, const HierarchyStats& s) {
 
 const char* precisionName(bool use_float) { return use_float ? "float" : "double"; }
 
+/// A note on stderr, before the query, for a mesh whose size ratio exceeds what the cell keys
+/// hold (HierarchyStats::below_cell0): its smallest triangles share level 0 and those close
+/// together are tested pairwise, so the query may take long.
+void noteBelowCell0(const std::string& file, const HierarchyStats& s) {
+  if (s.below_cell0 == 0) return;
+  std::fprintf(stderr,
+               "kdet: note: %s: %zu of %zu triangles are smaller than the finest cell (%.3g, the "
+               "mesh's extent / 2^38; sizes %.3g to %.3g); they share level 0, and those close "
+               "together are tested pairwise, so the query may take long (docs/numerics.md, "
+               "section 1)\n",
+               file.c_str(), s.below_cell0, s.triangles, s.cell_size0, s.d_min, s.d_max);
+}
+
 // ---------------------------------------------------------------------------------------------
 // demo
 
@@ -527,6 +540,10 @@ int runCollide(const QueryCliOptions& o) {
     b.prepareCpuHash();
   }
   const double build_ms = msSince(t0);
+  if (!on.gpu()) {
+    noteBelowCell0(o.files[0], a.stats());
+    noteBelowCell0(o.files[1], b.stats());
+  }
   QueryOptions q;
   q.threads = o.common.threads;
   q.backend = on.backend;
@@ -559,6 +576,7 @@ int runSelf(const QueryCliOptions& o) {
   HashedMesh<S> h(std::move(m), Transform<S>::identity(), o.common.threads);
   if (!on.gpu()) h.prepareCpuHash();  // built lazily otherwise (inside the query)
   const double build_ms = msSince(t0);
+  if (!on.gpu()) noteBelowCell0(o.files[0], h.stats());
   QueryOptions q;
   q.threads = o.common.threads;
   q.backend = on.backend;
