@@ -337,6 +337,7 @@ void bindMesh(py::module_& m, const char* name, const char* dtype) {
         d["cells"] = s.cells;
         d["entries"] = s.entries;
         d["max_cell_load"] = s.max_cell_load;
+        d["below_cell0"] = s.below_cell0;
         d["memory_bytes"] = s.memory_bytes;
         return d;
       }, "The hierarchy's statistics (builds the CPU hash if it is not current).")

@@ -122,6 +122,14 @@ class CoreQueries(unittest.TestCase):
         self.assertEqual(s["triangles"], 800)
         self.assertGreaterEqual(s["levels"], 1)
         self.assertGreaterEqual(s["entries"], 800)
+        self.assertEqual(s["below_cell0"], 0)  # a size ratio within 2^38
+        # One triangle of 2e12 over two of about 1.6e-3 that cross it: a ratio beyond 2^38.
+        v = np.array([[-1e12, -1e12, 0], [1e12, -1e12, 0], [0, 1e12, 0], [0, 0, -5e-4],
+                      [1e-3, 0, 5e-4], [0, 1e-3, 5e-4], [2e-3, 0, -5e-4], [3e-3, 0, 5e-4],
+                      [2e-3, 1e-3, 5e-4]])
+        wide = kdet_fcl.Mesh(v, np.array([[0, 1, 2], [3, 4, 5], [6, 7, 8]]))
+        self.assertEqual(wide.stats()["below_cell0"], 2)
+        self.assertEqual(len(kdet_fcl.intersect_self(wide)), 2)
         k = kdet_fcl.analyze_kfree(m, keep_counts=True)
         self.assertEqual(k["triangles"], 800)
         self.assertEqual(len(k["counts"]), 800)
