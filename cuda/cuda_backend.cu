@@ -56,6 +56,7 @@
 #include "device_hash.cuh"
 #include "device_scope.h"
 #include "staged_upload.h"
+#include "kdet_fcl/backend.h"
 #include "kdet_fcl/detail/aabb.h"
 #include "kdet_fcl/detail/enclosing_sphere.h"
 #include "kdet_fcl/detail/hierarchy.h"
@@ -2032,11 +2033,7 @@ int deviceKnob() { return static_cast<int>(detail::numberKnob("KDET_FCL_CUDA_DEV
 
 /// Throws InvalidInputError unless CUDA device `d` exists (`what` names where d came from).
 void checkDeviceOrdinal(int d, const std::string& what) {
-  int count = 0;
-  if (cudaGetDeviceCount(&count) != cudaSuccess) {
-    (void)cudaGetLastError();
-    count = 0;
-  }
+  const int count = kdet_fcl::cudaDeviceCount();  // (asked of the runtime once per process)
   if (d < 0 || d >= count)
     throw InvalidInputError(what + " names CUDA device " + std::to_string(d) + ", but this machine has " +
                             std::to_string(count) + (count == 1 ? " device (0)" : " devices") +
@@ -3777,9 +3774,7 @@ template <class Kernel>
 unsigned int residentBlocks(Kernel* kernel, unsigned int all, int block = kQueryBlock,
                             std::size_t dynamic_smem = 0) {
   static std::map<std::pair<int, const void*>, int> per_sm;  // (device, kernel)
-  int device = 0;
-  CUDA_TRY(cudaGetDevice(&device));  // the context's (the call's DeviceScope)
-  const std::pair<int, const void*> key(device, reinterpret_cast<const void*>(kernel));
+  const std::pair<int, const void*> key(context().device, reinterpret_cast<const void*>(kernel));
   auto it = per_sm.find(key);
   if (it == per_sm.end()) {
     int b = 0;
@@ -4808,16 +4803,11 @@ std::size_t deviceBytesInUse() {
 void releaseDeviceMemory() {
   Context& ctx = context();
   std::lock_guard<std::mutex> lock(ctx.mutex);
-  if (!ctx.ready) {
-    ctx.releaseAll();  // (holds nothing on a device)
-    return;
-  }
-  try {
-    const DeviceScope scope(ctx.device);
-    ctx.releaseAll();
-  } catch (const CudaError&) {
-    ctx.releaseAll();  // the device could not be made current: free from here (cudaFree takes any)
-  }
+  if (!ctx.ready) return ctx.releaseAll();  // (holds nothing on a device)
+  // Where the device cannot be made current, this thread frees (cudaFree takes any pointer).
+  cudaError_t entered = cudaSuccess;
+  const DeviceScope scope(ctx.device, &entered);
+  ctx.releaseAll();
 }
 
 void setDevice(int device) {
@@ -4827,13 +4817,11 @@ void setDevice(int device) {
   if (ctx.device == device) return;
   if (ctx.ready) {
     // Everything on the old device goes: the next call initialises on the new one, and each
-    // mesh is uploaded and hashed there again by its next query.
-    try {
-      const DeviceScope scope(ctx.device);
-      ctx.teardown();
-    } catch (const CudaError&) {
-      ctx.teardown();
-    }
+    // mesh is uploaded and hashed there again by its next query (on the old device where it can
+    // be made current, else from this thread, as releaseDeviceMemory).
+    cudaError_t entered = cudaSuccess;
+    const DeviceScope scope(ctx.device, &entered);
+    ctx.teardown();
     g_num_sms = 0;
   }
   ctx.device = device;

@@ -517,7 +517,8 @@ HierarchyStats HierarchicalHash<S>::stats() const {
   for (const Table* t : {&upper_, &lower_})
     for (const Slot& s : t->slots)
       st.max_cell_load = std::max<std::size_t>(st.max_cell_load, s.count);
-  for (const double d : diameter) st.below_cell0 += (d > 0 && d < grid.cell0) ? 1 : 0;
+  if (grid.cell0 > d_min)  // (else no positive diameter lies below the finest cell)
+    for (const double d : diameter) st.below_cell0 += (d > 0 && d < grid.cell0) ? 1 : 0;
   st.memory_bytes = memoryBytes();
   return st;
 }
